@@ -1,0 +1,49 @@
+//! One error type for the library and the CLI, with the exit code each kind of failure maps to.
+
+use std::path::Path;
+
+/// Everything that can go wrong, sorted by whose fault it is.
+///
+/// `Usage` and `Input` are the user's to fix (exit code 2); `Io` and `Numerical` are failures of the
+/// run itself (exit code 1). Every message names the problem and, where there is one, the fix.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A flag, name or parameter that cannot be used as given.
+    #[error("{0}")]
+    Usage(String),
+    /// An input file or value that is malformed, empty, non-finite or out of range.
+    #[error("{0}")]
+    Input(String),
+    /// The operating system refused a read or a write.
+    #[error("{context}: {source}")]
+    Io {
+        /// What was being done, e.g. "cannot write out/spectrum.npy".
+        context: String,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// A computation that cannot produce a finite, meaningful answer.
+    #[error("{0}")]
+    Numerical(String),
+}
+
+impl Error {
+    /// Process exit code: 2 for usage and input errors, 1 otherwise.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Error::Usage(_) | Error::Input(_) => 2,
+            Error::Io { .. } | Error::Numerical(_) => 1,
+        }
+    }
+
+    /// Wraps an I/O error with the path it concerns.
+    pub fn io(what: &str, path: &Path, source: std::io::Error) -> Self {
+        Error::Io {
+            context: format!("cannot {what} {}", path.display()),
+            source,
+        }
+    }
+}
+
+/// Result with the crate's [`Error`].
+pub type Result<T> = std::result::Result<T, Error>;

@@ -1,0 +1,15 @@
+//! anisospec: design Monte Carlo sample patterns with anisotropic spectra, and measure what they buy.
+//!
+//! The modules follow the pipeline of DESIGN §1: [`samplers`] make [`points`], whose [`spectrum`] is
+//! computed exactly or by NUFFT and viewed as radial, anisotropy and cone profiles; [`output`] writes
+//! npy, EXR, PNG and CSV.
+
+pub mod error;
+pub mod integrands;
+pub mod output;
+pub mod points;
+pub mod rng;
+pub mod samplers;
+pub mod spectrum;
+
+pub use error::{Error, Result};

@@ -1,0 +1,84 @@
+//! Images: EXR for float values, PNG (8-bit) for looking. Both take pixels with the top row first.
+//!
+//! Spectra are stored with `k2` increasing with the row index ([`crate::spectrum`]); images put larger
+//! `k2` higher up, like a plot, so [`spectrum_image_rows`] flips them.
+
+use super::write_atomic;
+use crate::error::Result;
+use std::path::Path;
+
+/// Writes float channels (each `width * height` values, top row first) as an EXR image.
+/// Channel names follow EXR custom: `Y` for one value per pixel, `R`, `G`, `B` for colour.
+pub fn write_exr(path: &Path, width: usize, height: usize, channels: &[(&str, Vec<f32>)]) -> Result<()> {
+    use exr::prelude::*;
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
+        .iter()
+        .map(|(name, values)| AnyChannel::new(*name, FlatSamples::F32(values.clone())))
+        .collect();
+    let layer = Layer::new(
+        (width, height),
+        LayerAttributes::named("anisospec"),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(list),
+    );
+    let image = Image::from_layer(layer);
+    write_atomic(path, |w| {
+        image
+            .write()
+            .to_buffered(w)
+            .map_err(|e| std::io::Error::other(e.to_string()))
+    })
+}
+
+/// Writes an 8-bit PNG, grey (`channels = 1`) or RGB (`channels = 3`), top row first.
+pub fn write_png(path: &Path, width: usize, height: usize, channels: usize, pixels: &[u8]) -> Result<()> {
+    let colour = if channels == 3 { png::ColorType::Rgb } else { png::ColorType::Grayscale };
+    write_atomic(path, |w| {
+        let mut enc = png::Encoder::new(w, width as u32, height as u32);
+        enc.set_color(colour);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut writer = enc.write_header().map_err(std::io::Error::other)?;
+        writer.write_image_data(pixels).map_err(std::io::Error::other)?;
+        writer.finish().map_err(std::io::Error::other)
+    })
+}
+
+/// A `res × res` spectrum (row `i` at `k2 = i − K/2`) as image rows with the largest `k2` on top.
+pub fn spectrum_image_rows(values: &[f64], res: usize) -> Vec<f64> {
+    values
+        .chunks_exact(res)
+        .rev()
+        .flat_map(|row| row.iter().copied())
+        .collect()
+}
+
+/// The fixed `log10 P` range PNG spectra are tone-mapped over: `[-2, 1]` (P from 0.01 to 10).
+pub const LOG_RANGE: (f64, f64) = (-2.0, 1.0);
+
+/// Grey level of a power value: `log10 P` mapped linearly from [`LOG_RANGE`] to 0..255, clamped.
+/// `P = 1` (white noise) is mid-grey.
+pub fn tone_map_log(p: f64) -> u8 {
+    let (lo, hi) = LOG_RANGE;
+    let l = if p > 0.0 { p.log10() } else { lo };
+    (((l - lo) / (hi - lo)).clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+/// Writes a spectrum as PNG (log tone map, largest `k2` on top), scaled up to at least 256 pixels.
+pub fn write_spectrum_png(path: &Path, values: &[f64], res: usize) -> Result<()> {
+    let rows = spectrum_image_rows(values, res);
+    let scale = (256 / res).max(1);
+    let side = res * scale;
+    let mut pixels = vec![0u8; side * side];
+    for (y, row) in pixels.chunks_exact_mut(side).enumerate() {
+        for (x, px) in row.iter_mut().enumerate() {
+            *px = tone_map_log(rows[(y / scale) * res + x / scale]);
+        }
+    }
+    write_png(path, side, side, 1, &pixels)
+}
+
+/// Writes a spectrum as a one-channel (`Y`) EXR with the raw values, largest `k2` on top.
+pub fn write_spectrum_exr(path: &Path, values: &[f64], res: usize) -> Result<()> {
+    let rows: Vec<f32> = spectrum_image_rows(values, res).iter().map(|&v| v as f32).collect();
+    write_exr(path, res, res, &[("Y", rows)])
+}

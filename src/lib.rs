@@ -4,10 +4,12 @@
 //! computed exactly or by NUFFT and viewed as radial, anisotropy and cone profiles; [`output`] writes
 //! npy, EXR, PNG and CSV.
 
+pub mod cli;
 pub mod error;
 pub mod integrands;
 pub mod output;
 pub mod points;
+pub mod render;
 pub mod rng;
 pub mod samplers;
 pub mod spectrum;

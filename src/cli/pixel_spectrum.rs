@@ -60,7 +60,8 @@ pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
     crate::output::write_npy(&args.output.with_extension("npy"), &[k, k], &p)?;
     crate::output::image::write_spectrum_exr(&args.output.with_extension("exr"), &p, k)?;
     let png = args.output.with_extension("png");
-    crate::output::image::write_png(&png, k, k, 1, &spectrum_png_pixels(&p, k))?;
+    let (side, pixels) = spectrum_png_pixels(&p, k);
+    crate::output::image::write_png(&png, side, side, 1, &pixels)?;
     println!(
         "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {} (.npy, .exr)",
         proj.name(),

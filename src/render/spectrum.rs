@@ -74,9 +74,13 @@ fn transpose(a: &[Complex64], n: usize) -> Vec<Complex64> {
     (0..n * n).map(|idx| a[(idx % n) * n + idx / n]).collect()
 }
 
+/// Smallest side of the PNG view; smaller grids are scaled up by an integer factor (nearest).
+pub const PNG_MIN_SIDE: usize = 512;
+
 /// The PNG view of an integrand spectrum: `log10(P / max_{k≠0} P)` mapped from `[−6, 0]` to 0..255,
-/// largest `k2` on top; the DC bin (the squared mean) is left out of the maximum.
-pub fn spectrum_png_pixels(p: &[f64], res: usize) -> Vec<u8> {
+/// largest `k2` on top, scaled up by an integer factor to at least [`PNG_MIN_SIDE`] pixels; the DC bin
+/// (the squared mean) is left out of the maximum. Returns the side and the grey pixels.
+pub fn spectrum_png_pixels(p: &[f64], res: usize) -> (usize, Vec<u8>) {
     let dc = (res / 2) * res + res / 2;
     let max = p
         .iter()
@@ -84,13 +88,19 @@ pub fn spectrum_png_pixels(p: &[f64], res: usize) -> Vec<u8> {
         .filter(|&(i, _)| i != dc)
         .map(|(_, &v)| v)
         .fold(f64::MIN_POSITIVE, f64::max);
-    crate::output::image::spectrum_image_rows(p, res)
+    let grey: Vec<u8> = crate::output::image::spectrum_image_rows(p, res)
         .iter()
         .map(|&v| {
             let l = if v > 0.0 { (v / max).log10() } else { -6.0 };
             (((l + 6.0) / 6.0).clamp(0.0, 1.0) * 255.0).round() as u8
         })
-        .collect()
+        .collect();
+    let scale = PNG_MIN_SIDE.div_ceil(res).max(1);
+    let side = res * scale;
+    let pixels = (0..side * side)
+        .map(|i| grey[(i / side / scale) * res + (i % side) / scale])
+        .collect();
+    (side, pixels)
 }
 
 #[cfg(test)]

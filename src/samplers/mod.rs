@@ -157,22 +157,27 @@ fn build_4d(name: &str) -> Option<Box<dyn Sampler>> {
     })
 }
 
-/// Levenshtein distance, for suggesting the closest name.
+/// Edit distance with adjacent transpositions (optimal string alignment), for suggesting the closest
+/// name: `cjm` is one step from `cmj`.
 fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, &cb) in b.iter().enumerate() {
-            let next = (prev + usize::from(ca != cb))
-                .min(row[j] + 1)
-                .min(row[j + 1] + 1);
-            prev = row[j + 1];
-            row[j + 1] = next;
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    let w = b.len() + 1;
+    let mut d = vec![0usize; (a.len() + 1) * w];
+    for i in 0..=a.len() {
+        for j in 0..=b.len() {
+            d[i * w + j] = if i == 0 || j == 0 {
+                i + j
+            } else {
+                let sub = d[(i - 1) * w + j - 1] + usize::from(a[i - 1] != b[j - 1]);
+                let mut best = sub.min(d[(i - 1) * w + j] + 1).min(d[i * w + j - 1] + 1);
+                if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                    best = best.min(d[(i - 2) * w + j - 2] + 1);
+                }
+                best
+            };
         }
     }
-    row[b.len()]
+    d[a.len() * w + b.len()]
 }
 
 /// Every name valid in `dims` dimensions, families expanded.
@@ -237,4 +242,24 @@ pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
         "unknown {dims}D sampler '{name}' (did you mean '{closest}'?); valid names: {}",
         valid.join(", ")
     )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn edit_distance_counts_transpositions() {
+        assert_eq!(edit_distance("cjm", "cmj"), 1);
+        assert_eq!(edit_distance("sobol", "sobol"), 0);
+        assert_eq!(edit_distance("", "oa"), 2);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+    }
+
+    #[test]
+    fn nearest_valid_prefers_smaller_on_ties() {
+        assert_eq!(nearest_valid(50, |c| c == 49 || c == 51), 49);
+        assert_eq!(nearest_valid(3, |c| c == 1 || c == 5), 1);
+        assert_eq!(nearest_valid(1, |c| c == 9), 9);
+    }
 }

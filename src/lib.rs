@@ -4,6 +4,7 @@
 //! computed exactly or by NUFFT and viewed as radial, anisotropy and cone profiles; [`output`] writes
 //! npy, EXR, PNG and CSV.
 
+pub mod cli;
 pub mod error;
 pub mod integrands;
 pub mod output;

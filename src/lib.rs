@@ -9,6 +9,7 @@ pub mod error;
 pub mod integrands;
 pub mod output;
 pub mod points;
+pub mod progress;
 pub mod render;
 pub mod rng;
 pub mod samplers;

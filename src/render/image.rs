@@ -6,7 +6,7 @@
 //! is applied to the pattern before the shear; both maps preserve the uniform measure, so every
 //! estimate is unbiased.
 
-use super::oracle::PixelOracle;
+use super::oracle::{PixelClass, PixelOracle};
 use super::pixel::{check_ref_count, fnv1a, stratified_reference, RENDER_VERSION};
 use super::scene::Scene;
 use crate::error::{Error, Result};
@@ -14,29 +14,13 @@ use crate::points::shear::{shear_set_4d, ShearMode};
 use crate::points::toroidal_shift;
 use crate::rng;
 use crate::samplers::{validate_n, Sampler};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::ProgressBar;
 use rand::Rng as _;
 use rayon::prelude::*;
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 /// Default rays per pixel of the reference image: `2^16`.
 pub const DEFAULT_IMAGE_REF_COUNT: usize = 1 << 16;
-
-/// A progress bar on stderr, hidden when stderr is not a terminal.
-pub fn progress_bar(len: u64, message: &str) -> ProgressBar {
-    let target = if std::io::stderr().is_terminal() {
-        ProgressDrawTarget::stderr()
-    } else {
-        ProgressDrawTarget::hidden()
-    };
-    let bar = ProgressBar::with_draw_target(Some(len), target);
-    if let Ok(style) = ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} rows ({eta})") {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    bar.set_message(message.to_string());
-    bar
-}
 
 /// The `n` points (`[n, 4]` row-major) of realization `index` of `seed`: a set of `sampler` from
 /// `stream(seed, index)`, shifted by a uniform toroidal shift from `substream(seed, index, 1)`, then,
@@ -72,15 +56,38 @@ pub fn estimate_pixel(scene: &Scene, px: usize, py: usize, points: &[f64]) -> f6
     sum / n as f64
 }
 
-/// Renders every pixel with `spp` points of `sampler` (4D), seeded by `seed`. With `shear`, each pixel's
-/// points are sheared by its oracle shear `(sx, sy)` in the given mode (`oracle` has one entry per
-/// pixel, row-major). Returns the image row-major from the top row.
+/// What a pixel the oracle classes as a double wedge (several depths) is sheared by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum WedgeShear {
+    /// The shear of the depth seen through the pixel and lens centres, like every other pixel.
+    Centre,
+    /// No shear: a single shear cannot fit a fan of them, and it undoes the pattern's own `x`
+    /// stratification, which an in-focus occluder edge needs (measured in tests/render.rs).
+    #[default]
+    None,
+}
+
+/// The per-pixel shears `(sx, sy)` the oracle gives: a hairline pixel's shear, 0 in focus, and for a
+/// double wedge as `wedge` says.
+pub fn oracle_shears(oracle: &[PixelOracle], wedge: WedgeShear) -> Vec<(f64, f64)> {
+    oracle
+        .iter()
+        .map(|o| match (o.class, wedge) {
+            (PixelClass::InFocus, _) | (PixelClass::DoubleWedge, WedgeShear::None) => (0.0, 0.0),
+            _ => (o.sx, o.sy),
+        })
+        .collect()
+}
+
+/// Renders every pixel with `spp` points of `sampler` (4D), seeded by `seed`. With `shear`, the points
+/// of pixel `i` are sheared by `shears[i] = (sx, sy)` in the given mode (one entry per pixel,
+/// row-major; see [`oracle_shears`]). Returns the image row-major from the top row.
 pub fn render_image(
     scene: &Scene,
     sampler: &dyn Sampler,
     spp: usize,
     seed: u64,
-    shear: Option<(&[PixelOracle], ShearMode)>,
+    shear: Option<(&[(f64, f64)], ShearMode)>,
     progress: &ProgressBar,
 ) -> Result<Vec<f64>> {
     if sampler.dims() != 4 {
@@ -95,7 +102,7 @@ pub fn render_image(
     if let Some((o, _)) = shear {
         if o.len() != w * h {
             return Err(Error::Input(format!(
-                "the oracle has {} pixels but the image has {w}x{h}",
+                "{} shears were given but the image has {w}x{h} pixels",
                 o.len()
             )));
         }
@@ -106,7 +113,7 @@ pub fn render_image(
             let row = (0..w)
                 .map(|px| {
                     let i = py * w + px;
-                    let s = shear.map(|(o, mode)| (o[i].sx, o[i].sy, mode));
+                    let s = shear.map(|(o, mode)| (o[i].0, o[i].1, mode));
                     let pts = pixel_points(sampler, spp, seed, i as u64, s);
                     estimate_pixel(scene, px, py, &pts)
                 })

@@ -207,6 +207,18 @@ fn back_wall_pixel_sheared_beats_padded_mj() {
         Some((s, s, ShearMode::Wrap)),
     );
     let _ = curve("random", &f, sampler("random").as_ref(), &ns, r, None);
+    for name in ["sobol", "xuyv-mj"] {
+        let sm = sampler(name);
+        let _ = curve(name, &f, sm.as_ref(), &ns, r, None);
+        let _ = curve(
+            &format!("{name} sheared (transport)"),
+            &f,
+            sm.as_ref(),
+            &ns,
+            r,
+            Some((s, s, ShearMode::Transported)),
+        );
+    }
     assert!(
         (s0 + 1.0).abs() < 0.25,
         "padded MJ slope {s0} ± {se0} is not near -1"
@@ -255,6 +267,9 @@ fn bad_input_is_reported_with_exit_code_two() {
     let e = Scene::load(Some(&range)).unwrap_err();
     assert_eq!(e.exit_code(), 2);
     assert!(e.to_string().contains("aperture"), "{e}");
+    let outside = write("outside.toml", "position = [0.99, 0.0, 0.0]\n");
+    let e = Scene::load(Some(&outside)).unwrap_err();
+    assert!(e.to_string().contains("position"), "{e}");
     let typed = write("typed.toml", "width = \"big\"\n");
     let e = Scene::load(Some(&typed)).unwrap_err();
     assert!(e.to_string().contains("width"), "{e}");
@@ -275,7 +290,7 @@ fn bad_input_is_reported_with_exit_code_two() {
     assert_eq!(e.exit_code(), 2);
     assert!(e.to_string().contains("aperture"), "{e}");
     let args = anisospec::cli::oracle::OracleArgs {
-        scene: Some(pinhole),
+        scene: Some(pinhole.clone()),
         output: dir.path().join("oracle.exr"),
     };
     assert_eq!(
@@ -283,6 +298,41 @@ fn bad_input_is_reported_with_exit_code_two() {
         2
     );
     assert!(!dir.path().join("oracle.exr").exists());
+
+    let render = |scene: Option<PathBuf>, name: &str, spp: usize, shear: bool| {
+        let args = anisospec::cli::render::RenderArgs {
+            scene,
+            sampler: Some(name.into()),
+            spp,
+            seed: 1,
+            shear: shear.then(|| "oracle".to_string()),
+            shear_mode: ShearMode::Transported,
+            wedge_shear: Default::default(),
+            reference: false,
+            ref_count: 1 << 10,
+            cache: Some(dir.path().join("cache")),
+            output: dir.path().join("img.exr"),
+        };
+        anisospec::cli::render::run(&args).unwrap_err()
+    };
+    let e = render(Some(pinhole), "padded-mj", 16, true);
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("aperture"), "{e}");
+    assert_eq!(render(None, "mj", 16, false).exit_code(), 2);
+    assert_eq!(render(None, "padded-mj", 17, false).exit_code(), 2);
+    assert_eq!(render(Some(unknown), "padded-mj", 16, false).exit_code(), 2);
+    assert!(!dir.path().join("img.exr").exists());
+    let px = anisospec::cli::pixel_spectrum::PixelSpectrumArgs {
+        scene: None,
+        pixel: "3,64".into(),
+        proj: "xu".into(),
+        res: 16,
+        average: 1,
+        output: dir.path().join("spec.npy"),
+    };
+    let e = anisospec::cli::pixel_spectrum::run(&px).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("64x64"), "{e}");
 }
 
 /// A scene file overrides camera, focus and aperture, and the oracle follows: focusing on the back
@@ -553,4 +603,63 @@ fn whole_image_mse_table() {
         wm < 3.0 * wse,
         "centre shear on double wedges is worse: {wm} ± {wse}"
     );
+}
+
+/// References are cached: a second integrand reads the first one's value bit for bit, and a cache file
+/// holding another key is not trusted.
+#[test]
+fn reference_cache_round_trip() {
+    let dir = tempfile::tempdir().unwrap();
+    let make = || {
+        PixelIntegrand::new(scene(), 5, 7)
+            .unwrap()
+            .with_ref_count(1 << 12)
+            .unwrap()
+            .with_cache_dir(Some(dir.path().to_path_buf()))
+    };
+    let a = make().reference();
+    let files: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(files.len(), 1);
+    assert_eq!(make().reference(), a);
+    // Tamper with the key: the value is recomputed, and equals the fresh computation.
+    let file = files[0].as_ref().unwrap().path();
+    let text = std::fs::read_to_string(&file).unwrap();
+    std::fs::write(
+        &file,
+        text.replace("px=5", "px=6")
+            .replace(&format!("{}", a.value), "0.5"),
+    )
+    .unwrap();
+    assert_eq!(make().reference(), a);
+    let fresh = make().with_cache_dir(None).reference();
+    assert_eq!(fresh, a);
+    assert!(a.stderr > 0.0 && a.stderr < 1e-2 * a.value.abs().max(1e-3));
+}
+
+/// The same seed renders the same bits on one thread and on the default pool.
+#[test]
+fn render_is_deterministic_across_thread_counts() {
+    use anisospec::render::image::render_image;
+    let sc = scene();
+    let hidden = indicatif::ProgressBar::hidden();
+    let s = sampler("padded-mj");
+    let oracle = oracle_image(&sc).unwrap();
+    let shears = anisospec::render::image::oracle_shears(&oracle, Default::default());
+    let run = || {
+        render_image(
+            &sc,
+            s.as_ref(),
+            16,
+            9,
+            Some((&shears, ShearMode::Transported)),
+            &hidden,
+        )
+        .unwrap()
+    };
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(run);
+    assert_eq!(one, run());
 }

@@ -19,6 +19,42 @@ use std::cell::RefCell;
 use std::f64::consts::PI;
 use std::sync::Arc;
 
+/// Runs `$body` with the const generic `$W` equal to the runtime width `$w` (2 ..= MAX_WIDTH), so that
+/// the `W × W` spreading and interpolation loops are unrolled for each width.
+macro_rules! with_width {
+    ($w:expr, $W:ident => $body:expr) => {
+        match $w {
+            2 => { const $W: usize = 2; $body }
+            3 => { const $W: usize = 3; $body }
+            4 => { const $W: usize = 4; $body }
+            5 => { const $W: usize = 5; $body }
+            6 => { const $W: usize = 6; $body }
+            7 => { const $W: usize = 7; $body }
+            8 => { const $W: usize = 8; $body }
+            9 => { const $W: usize = 9; $body }
+            10 => { const $W: usize = 10; $body }
+            11 => { const $W: usize = 11; $body }
+            12 => { const $W: usize = 12; $body }
+            13 => { const $W: usize = 13; $body }
+            14 => { const $W: usize = 14; $body }
+            15 => { const $W: usize = 15; $body }
+            16 => { const $W: usize = 16; $body }
+            w => unreachable!("kernel width {w} outside 2..=16"),
+        }
+    };
+}
+
+/// Panics with a clear message on a non-finite coordinate (points must be finite).
+#[inline(always)]
+fn check_finite(j: usize, p: &[f64; 2]) {
+    assert!(
+        p[0].is_finite() && p[1].is_finite(),
+        "point {j} has a non-finite coordinate ({}, {}); points must be finite",
+        p[0],
+        p[1]
+    );
+}
+
 /// Smallest tolerance accepted by [`Nufft2d::new`].
 pub const EPS_MIN: f64 = 1e-14;
 /// Largest tolerance accepted by [`Nufft2d::new`].
@@ -34,6 +70,8 @@ const SIGMA: f64 = 2.0;
 /// point) still misses it on jittered sets at eps = 1e-3 (1.3e-2), SAFETY = 100 meets it with a margin
 /// of 4× or more.
 const SAFETY: f64 = 100.0;
+/// Rows per block in the transposing loops of type 1.
+const BLOCK: usize = 8;
 /// Largest kernel width (grid points per dimension).
 const MAX_WIDTH: usize = 16;
 
@@ -52,6 +90,8 @@ pub struct Nufft2d {
     beta: f64,
     /// `1 / ψ̂(k)` for `k = 0 ..= res/2`: the deconvolution factors (even in `k`).
     corr: Vec<f64>,
+    /// Piecewise-polynomial kernel (see `fit_kernel`); empty when the kernel is evaluated directly.
+    coef: Vec<f64>,
     r2c: Arc<dyn RealToComplex<f64>>,
     fwd: Arc<dyn Fft<f64>>,
     inv: Arc<dyn Fft<f64>>,
@@ -152,11 +192,16 @@ impl Nufft2d {
             w,
             beta,
             corr: Vec::new(),
+            coef: Vec::new(),
             r2c: RealFftPlanner::<f64>::new().plan_fft_forward(n),
             fwd: FftPlanner::new().plan_fft_forward(n),
             inv: FftPlanner::new().plan_fft_inverse(n),
         };
         plan.corr = plan.deconvolution();
+        // A kernel-value error δ changes each point's contribution by about δ relative.
+        if let Some((_, coef)) = plan.fit_kernel(tol / 10.0) {
+            plan.coef = coef;
+        }
         Ok(plan)
     }
 
@@ -200,52 +245,158 @@ impl Nufft2d {
             .collect()
     }
 
-    /// Padded-grid index of the first kernel point and the `w` kernel values for coordinate `x`.
+    /// Fits, for each kernel point `l`, a polynomial in `u ∈ [−1, 1]` to `φ(−1 + (s + l) / (w/2))`
+    /// with `s = (u + 1)/2` the offset of the point from the first grid node. Chebyshev interpolation,
+    /// then monomial coefficients for Horner's rule; the degree grows until the measured maximum error
+    /// is below `target`. Layout: `coef[deg * w + l]`, highest degree first. `None` if no degree up to
+    /// 30 reaches `target` (then the kernel is evaluated directly).
+    fn fit_kernel(&self, target: f64) -> Option<(usize, Vec<f64>)> {
+        let w = self.w;
+        let half_w = w as f64 / 2.0;
+        let f = |l: usize, u: f64| self.phi(-1.0 + ((u + 1.0) / 2.0 + l as f64) / half_w);
+        for d in 4..=30 {
+            let m = d + 1;
+            let mut coef = vec![0.0; m * w];
+            for l in 0..w {
+                // Chebyshev coefficients of the degree-d interpolant at the Chebyshev points.
+                let vals: Vec<f64> = (0..m)
+                    .map(|i| f(l, (PI * (i as f64 + 0.5) / m as f64).cos()))
+                    .collect();
+                let cheb: Vec<f64> = (0..m)
+                    .map(|k| {
+                        let c: f64 = vals
+                            .iter()
+                            .enumerate()
+                            .map(|(i, v)| v * (PI * k as f64 * (i as f64 + 0.5) / m as f64).cos())
+                            .sum();
+                        c * if k == 0 { 1.0 } else { 2.0 } / m as f64
+                    })
+                    .collect();
+                // Monomial coefficients: T_{k+1} = 2u T_k − T_{k−1}.
+                let mut mono = vec![0.0; m];
+                let (mut t0, mut t1) = (vec![0.0; m], vec![0.0; m]);
+                t0[0] = 1.0;
+                if m > 1 {
+                    t1[1] = 1.0;
+                }
+                for (k, &a) in cheb.iter().enumerate() {
+                    let tk = if k == 0 { &t0 } else { &t1 };
+                    for (mc, t) in mono.iter_mut().zip(tk) {
+                        *mc += a * t;
+                    }
+                    if k >= 1 {
+                        let mut t2 = vec![0.0; m];
+                        for i in 0..m {
+                            t2[i] = if i > 0 { 2.0 * t1[i - 1] } else { 0.0 } - t0[i];
+                        }
+                        t0 = std::mem::replace(&mut t1, t2);
+                    }
+                }
+                for (deg, c) in mono.iter().enumerate() {
+                    coef[(d - deg) * w + l] = *c;
+                }
+            }
+            let worst = (0..=200)
+                .map(|i| -1.0 + i as f64 / 100.0)
+                .flat_map(|u| (0..w).map(move |l| (l, u)))
+                .map(|(l, u)| {
+                    let h = coef.chunks_exact(w).fold(0.0, |acc, row| acc * u + row[l]);
+                    (h - f(l, u)).abs()
+                })
+                .fold(0.0, f64::max);
+            if worst <= target {
+                return Some((d, coef));
+            }
+        }
+        None
+    }
+
+    /// Padded-grid index of the first kernel point and the `W` kernel values for coordinate `x`.
     ///
-    /// The padded grid has side `n + w`; padded index `p` is fine index `(p − w/2) mod n`.
+    /// The padded grid has side `n + W`; padded index `p` is fine index `(p − W/2) mod n`.
     #[inline(always)]
-    fn kernel_1d(&self, x: f64, vals: &mut [f64; MAX_WIDTH]) -> usize {
+    fn kernel_w<const W: usize>(&self, x: f64) -> (usize, [f64; W]) {
         let n = self.n as f64;
-        let half_w = self.w as f64 / 2.0;
-        let mut t = x.rem_euclid(1.0) * n;
+        let half_w = W as f64 / 2.0;
+        let mut t = (x - x.floor()) * n;
         if t >= n {
             t -= n;
         }
         let i0 = (t - half_w).ceil();
-        let scale = 1.0 / half_w;
-        let a = i0 - t;
-        for (l, v) in vals.iter_mut().take(self.w).enumerate() {
-            *v = self.phi((a + l as f64) * scale);
+        // Offset of the first node from the left end of the support, in [0, 1).
+        let s = i0 - (t - half_w);
+        let mut v = [0.0; W];
+        if self.coef.is_empty() {
+            for (l, v) in v.iter_mut().enumerate() {
+                *v = self.phi(-1.0 + (s + l as f64) / half_w);
+            }
+        } else {
+            let u = 2.0 * s - 1.0;
+            let mut rows = self.coef.chunks_exact(W);
+            v.copy_from_slice(rows.next().expect("kernel fit has a leading row"));
+            for row in rows {
+                for (v, c) in v.iter_mut().zip(row) {
+                    *v = *v * u + c;
+                }
+            }
         }
-        (i0 as isize + (self.w / 2) as isize) as usize
+        ((i0 as isize + (W / 2) as isize) as usize, v)
     }
 
     /// Spreads points with weights `weight(j)` onto the padded real grid `grid` (side `n + w`, zeroed)
     /// and folds the padding back onto the periodic `n × n` core.
     fn spread(&self, points: &[[f64; 2]], weight: impl Fn(usize) -> f64, grid: &mut [f64]) {
-        let w = self.w;
-        let side = self.n + w;
-        let mut kx = [0.0; MAX_WIDTH];
-        let mut ky = [0.0; MAX_WIDTH];
+        with_width!(self.w, W => self.spread_w::<W>(points, &weight, grid));
+        self.fold(grid);
+    }
+
+    fn spread_w<const W: usize>(
+        &self,
+        points: &[[f64; 2]],
+        weight: &impl Fn(usize) -> f64,
+        grid: &mut [f64],
+    ) {
+        let side = self.n + W;
         for (j, p) in points.iter().enumerate() {
-            assert!(
-                p[0].is_finite() && p[1].is_finite(),
-                "point {j} has a non-finite coordinate ({}, {}); points must be finite",
-                p[0],
-                p[1]
-            );
-            let px = self.kernel_1d(p[0], &mut kx);
-            let py = self.kernel_1d(p[1], &mut ky);
+            check_finite(j, p);
+            let (px, kx) = self.kernel_w::<W>(p[0]);
+            let (py, ky) = self.kernel_w::<W>(p[1]);
             let c = weight(j);
-            for (l2, &vy) in ky[..w].iter().enumerate() {
-                let row = &mut grid[(py + l2) * side + px..][..w];
+            let block = &mut grid[py * side + px..(py + W - 1) * side + px + W];
+            for (l2, &vy) in ky.iter().enumerate() {
+                let row: &mut [f64; W] = (&mut block[l2 * side..l2 * side + W])
+                    .try_into()
+                    .expect("W values");
                 let cy = c * vy;
-                for (g, &vx) in row.iter_mut().zip(&kx[..w]) {
+                for (g, &vx) in row.iter_mut().zip(&kx) {
                     *g += cy * vx;
                 }
             }
         }
-        self.fold(grid);
+    }
+
+    /// Interpolates the padded complex grid (side `n + W`) at each point.
+    fn interp_w<const W: usize>(&self, grid: &[Complex64], points: &[[f64; 2]]) -> Vec<Complex64> {
+        let side = self.n + W;
+        points
+            .iter()
+            .enumerate()
+            .map(|(j, p)| {
+                check_finite(j, p);
+                let (px, kx) = self.kernel_w::<W>(p[0]);
+                let (py, ky) = self.kernel_w::<W>(p[1]);
+                let mut g = Complex64::new(0.0, 0.0);
+                for (l2, &vy) in ky.iter().enumerate() {
+                    let row = &grid[(py + l2) * side + px..][..W];
+                    let mut acc = Complex64::new(0.0, 0.0);
+                    for (u, &vx) in row.iter().zip(&kx) {
+                        acc += u * vx;
+                    }
+                    g += acc * vy;
+                }
+                g
+            })
+            .collect()
     }
 
     /// Adds the padding rows and columns of a padded grid onto the periodic core they alias.
@@ -318,41 +469,65 @@ impl Nufft2d {
             reset(&mut s.real, side * side, 0.0);
             self.spread(points, weight, &mut s.real);
             // Real-to-complex FFT along each core row (x → k1 ≥ 0); keep k1 = 0 ..= K/2, transposed so
-            // that each kept k1 owns a contiguous column of length n over the rows (y).
+            // that each kept k1 owns a contiguous column of length n over the rows (y). Rows go in
+            // blocks of BLOCK so that the transposed writes fill whole cache lines.
             reset(&mut s.cplx, ncols * n, zero);
-            reset(&mut s.row, n / 2 + 1, zero);
+            reset(&mut s.row, BLOCK * (n / 2 + 1), zero);
             let scratch_len = self
                 .r2c
                 .get_scratch_len()
                 .max(self.fwd.get_inplace_scratch_len());
             reset(&mut s.fft, scratch_len, zero);
-            for m2 in 0..n {
-                let r = (m2 + off) * side + off;
-                self.r2c
-                    .process_with_scratch(&mut s.real[r..r + n], &mut s.row, &mut s.fft)
-                    .expect("realfft buffer sizes match the plan");
-                for (k1, v) in s.row[..ncols].iter().enumerate() {
-                    s.cplx[k1 * n + m2] = *v;
+            let stride = n / 2 + 1;
+            for m0 in (0..n).step_by(BLOCK) {
+                let rows = BLOCK.min(n - m0);
+                for b in 0..rows {
+                    let r = (m0 + b + off) * side + off;
+                    self.r2c
+                        .process_with_scratch(
+                            &mut s.real[r..r + n],
+                            &mut s.row[b * stride..(b + 1) * stride],
+                            &mut s.fft,
+                        )
+                        .expect("realfft buffer sizes match the plan");
+                }
+                for k1 in 0..ncols {
+                    let col = &mut s.cplx[k1 * n + m0..k1 * n + m0 + rows];
+                    for (b, c) in col.iter_mut().enumerate() {
+                        *c = s.row[b * stride + k1];
+                    }
                 }
             }
             // Complex FFT along y for each kept column (batched: the buffer is ncols chunks of n).
             self.fwd.process_with_scratch(&mut s.cplx, &mut s.fft);
+            // Deconvolve and emit, in blocks of BLOCK output rows so that the column reads are short
+            // contiguous runs.
             let cols = &s.cplx;
-            for i in 0..k {
-                let k2 = i as isize - half as isize;
-                let c2 = self.corr[k2.unsigned_abs()];
-                let pos = k2.rem_euclid(n as isize) as usize;
-                let neg = (-k2).rem_euclid(n as isize) as usize;
+            for i0 in (0..k).step_by(BLOCK) {
+                let rows = BLOCK.min(k - i0);
+                let mut pos = [0usize; BLOCK];
+                let mut neg = [0usize; BLOCK];
+                let mut c2 = [0.0; BLOCK];
+                for b in 0..rows {
+                    let k2 = (i0 + b) as isize - half as isize;
+                    c2[b] = self.corr[k2.unsigned_abs()];
+                    pos[b] = k2.rem_euclid(n as isize) as usize;
+                    neg[b] = (-k2).rem_euclid(n as isize) as usize;
+                }
                 for j in 0..k {
-                    let k1 = j as isize - half as isize;
-                    let a = k1.unsigned_abs();
-                    let f = if k1 >= 0 {
-                        cols[a * n + pos]
+                    let a = j.abs_diff(half);
+                    let col = &cols[a * n..(a + 1) * n];
+                    let c1 = self.corr[a];
+                    if j >= half {
+                        for b in 0..rows {
+                            emit((i0 + b) * k + j, col[pos[b]] * (c1 * c2[b]));
+                        }
                     } else {
                         // Real grid: B(−k) = conj(B(k)).
-                        cols[a * n + neg].conj()
-                    };
-                    emit(i * k + j, f * (c2 * self.corr[a]));
+                        for b in 0..rows {
+                            emit((i0 + b) * k + j, col[neg[b]].conj() * (c1 * c2[b]));
+                        }
+                    }
                 }
             }
         });
@@ -412,32 +587,7 @@ impl Nufft2d {
             }
             // Interpolate.
             let grid = &s.cplx;
-            let mut kx = [0.0; MAX_WIDTH];
-            let mut ky = [0.0; MAX_WIDTH];
-            points
-                .iter()
-                .enumerate()
-                .map(|(j, p)| {
-                    assert!(
-                        p[0].is_finite() && p[1].is_finite(),
-                        "point {j} has a non-finite coordinate ({}, {}); points must be finite",
-                        p[0],
-                        p[1]
-                    );
-                    let px = self.kernel_1d(p[0], &mut kx);
-                    let py = self.kernel_1d(p[1], &mut ky);
-                    let mut g = zero;
-                    for (l2, &vy) in ky[..w].iter().enumerate() {
-                        let row = &grid[(py + l2) * side + px..][..w];
-                        let mut acc = zero;
-                        for (u, &vx) in row.iter().zip(&kx[..w]) {
-                            acc += u * vx;
-                        }
-                        g += acc * vy;
-                    }
-                    g
-                })
-                .collect()
+            with_width!(w, W => self.interp_w::<W>(grid, points))
         })
     }
 }

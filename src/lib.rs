@@ -8,6 +8,7 @@ pub mod error;
 pub mod integrands;
 pub mod output;
 pub mod points;
+pub mod progress;
 pub mod rng;
 pub mod samplers;
 pub mod spectrum;

@@ -5,6 +5,8 @@
 //! (first projected dimension) and `k2 = i − K/2` (second).
 
 pub mod exact;
+pub mod expected;
+pub mod profiles;
 
 use crate::error::{Error, Result};
 use rustfft::num_complex::Complex64;
@@ -19,6 +21,18 @@ pub enum Method {
         /// Requested tolerance, in `[1e-14, 1e-1]`.
         eps: f64,
     },
+}
+
+impl Method {
+    /// The NUFFT with tolerance `eps`, checked to lie in `[1e-14, 1e-1]`.
+    pub fn nufft(eps: f64) -> Result<Self> {
+        if !(1e-14..=1e-1).contains(&eps) {
+            return Err(Error::Usage(format!(
+                "--eps {eps} is outside [1e-14, 1e-1]; the NUFFT tolerance is a relative error, e.g. --eps 1e-6"
+            )));
+        }
+        Ok(Method::Nufft { eps })
+    }
 }
 
 /// Checks a spectrum resolution `K`: even and positive.

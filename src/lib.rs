@@ -4,6 +4,8 @@
 //! computed exactly or by NUFFT and viewed as radial, anisotropy and cone profiles; [`output`] writes
 //! npy, EXR, PNG and CSV.
 
+pub mod cli;
+pub mod converge;
 pub mod error;
 pub mod integrands;
 pub mod output;
@@ -12,5 +14,6 @@ pub mod progress;
 pub mod rng;
 pub mod samplers;
 pub mod spectrum;
+pub mod variance;
 
 pub use error::{Error, Result};

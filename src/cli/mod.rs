@@ -1,0 +1,1 @@
+//! Command-line subcommands of the analysis: integrands, variance, converge.

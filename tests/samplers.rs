@@ -305,6 +305,12 @@ fn poisson_keeps_the_requested_radius() {
         tight.try_generate(200, &mut stream(1, 0)),
         Err(Error::Numerical(_))
     ));
+    // The infallible path backs off instead, and says how far; the set keeps the radius it reports.
+    let (set, rel) = tight.generate_reporting(200, &mut stream(1, 0));
+    assert!(rel < 0.99 && rel > 0.5, "backed-off relative radius {rel}");
+    let nn = nn_distances(&set);
+    assert_eq!(nn.len(), 200);
+    assert!(nn.iter().all(|&d| d >= rel), "a pair is closer than {rel}");
     assert!(Poisson::new(0.0).is_err() && Poisson::new(1.5).is_err());
 }
 

@@ -426,3 +426,93 @@ fn halton_prefixes_stratify_mixed_radix_grids() {
         assert!(stratified(&proj(&set, 4, 0, 3), 2, 7));
     }
 }
+
+/// Mean over `sets` realizations of `P(k) - expect(k)` averaged over the frequencies `keep` accepts on
+/// a 16 × 16 grid, with its standard error (from the spread of the per-set means).
+fn spectral_excess(
+    pts: &PointSets,
+    a: usize,
+    b: usize,
+    keep: impl Fn(i64, i64) -> bool,
+    expect: impl Fn(i64, i64) -> f64,
+) -> (f64, f64) {
+    use anisospec::points::Projection;
+    use anisospec::spectrum::{power, Method};
+    let res = 16usize;
+    let per_set: Vec<f64> = (0..pts.sets())
+        .map(|s| {
+            let p = power(&pts.project(s, Projection { a, b }), res, Method::Exact);
+            let (mut sum, mut count) = (0.0, 0);
+            for i in 0..res {
+                for j in 0..res {
+                    let (k1, k2) = (j as i64 - 8, i as i64 - 8);
+                    if (k1, k2) != (0, 0) && keep(k1, k2) {
+                        sum += p[i * res + j] - expect(k1, k2);
+                        count += 1;
+                    }
+                }
+            }
+            sum / count as f64
+        })
+        .collect();
+    let r = per_set.len() as f64;
+    let mean = per_set.iter().sum::<f64>() / r;
+    let var = per_set.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (r - 1.0);
+    (mean, (var / r).sqrt())
+}
+
+#[test]
+fn spectra_match_theory_where_it_is_known() {
+    let sinc2 = |t: f64| if t == 0.0 { 1.0 } else { (t.sin() / t).powi(2) };
+    let m = 16.0;
+    // Jittered with m × m cells: E[P(k)] = 1 - sinc²(π k1/m) sinc²(π k2/m) for 0 < |k| < m.
+    let jit = |k1: i64, k2: i64| {
+        1.0 - sinc2(std::f64::consts::PI * k1 as f64 / m)
+            * sinc2(std::f64::consts::PI * k2 as f64 / m)
+    };
+    let low = |k1: i64, k2: i64| k1 * k1 + k2 * k2 <= 16;
+    let off_axis = |k1: i64, k2: i64| k1 != 0 && k2 != 0;
+    let sets = |name: &str, dims, seed| {
+        generate_sets(build(name, dims).unwrap().as_ref(), 256, 64, seed).unwrap()
+    };
+    let checks = [
+        ("random", 2, 0, 1, true),
+        ("jittered", 2, 0, 1, false),
+        ("xuyv-jittered", 4, 0, 2, false),
+        ("xuyv-jittered", 4, 1, 3, false),
+        ("padded-jittered", 4, 0, 1, false),
+        ("random", 4, 1, 2, true),
+    ];
+    for (seed, (name, dims, a, b, white)) in (11..).zip(checks) {
+        // A different seed per check: sets of one seed share their first inner 2D set.
+        let pts = sets(name, dims, seed);
+        let (excess, se) = if white {
+            spectral_excess(&pts, a, b, low, |_, _| 1.0)
+        } else {
+            spectral_excess(&pts, a, b, low, jit)
+        };
+        assert!(
+            excess.abs() < 4.0 * se,
+            "{name} ({a},{b}): excess {excess} ± {se}"
+        );
+        assert!(se > 0.0 && se < 0.05, "{name}: standard error {se}");
+    }
+    // Padding leaves xu white away from the axes (DESIGN §2): far above the jittered spectrum there.
+    let pts = sets("padded-jittered", 4, 99);
+    let (excess, se) = spectral_excess(
+        &pts,
+        0,
+        2,
+        |k1, k2| low(k1, k2) && off_axis(k1, k2),
+        |_, _| 1.0,
+    );
+    assert!(
+        excess.abs() < 4.0 * se,
+        "padded-jittered xu: excess {excess} ± {se}"
+    );
+    let (gap, _) = spectral_excess(&pts, 0, 2, |k1, k2| low(k1, k2) && off_axis(k1, k2), jit);
+    assert!(
+        gap > 10.0 * se,
+        "padded-jittered xu is not whiter than jittered: {gap} vs {se}"
+    );
+}

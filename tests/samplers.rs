@@ -516,3 +516,21 @@ fn spectra_match_theory_where_it_is_known() {
         "padded-jittered xu is not whiter than jittered: {gap} vs {se}"
     );
 }
+
+#[test]
+fn every_sampler_handles_its_smallest_sets() {
+    for dims in [2, 4] {
+        for name in all_names(dims) {
+            let s = build(&name, dims).unwrap();
+            for target in [1, 2, 3] {
+                let n = valid_near(s.as_ref(), target);
+                let pts = generate_sets(s.as_ref(), n, 2, 5).unwrap();
+                assert_eq!(pts.n(), n, "{name}");
+                assert!(
+                    pts.data().iter().all(|c| (0.0..1.0).contains(c)),
+                    "{name} N={n}"
+                );
+            }
+        }
+    }
+}

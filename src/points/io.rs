@@ -99,7 +99,9 @@ fn parse_text(text: &str) -> Result<PointSets> {
             }
             _ => {}
         }
-        sets.last_mut().expect("one set is always open").extend(coords);
+        sets.last_mut()
+            .expect("one set is always open")
+            .extend(coords);
     }
     if sets.last().is_some_and(Vec::is_empty) {
         sets.pop();
@@ -122,7 +124,7 @@ pub fn write_points(path: &Path, points: &PointSets) -> Result<()> {
                     writeln!(w, "#")?;
                 }
                 for p in points.set(s).chunks_exact(points.dims()) {
-                    let cells: Vec<String> = p.iter().map(|c| format!("{c:.17}")).collect();
+                    let cells: Vec<String> = p.iter().map(|c| format!("{c}")).collect();
                     writeln!(w, "{}", cells.join(" "))?;
                 }
             }

@@ -46,7 +46,8 @@ where
     check_res(res)?;
     if realizations == 0 {
         return Err(Error::Usage(
-            "--realizations 0 averages nothing; give at least 1 (2 or more for standard errors)".into(),
+            "--realizations 0 averages nothing; give at least 1 (2 or more for standard errors)"
+                .into(),
         ));
     }
     let bins = res * res;
@@ -117,11 +118,22 @@ pub fn of_sampler(
     validate_n(sampler, n)?;
     let dims = sampler.dims();
     expected_spectrum(realizations, res, method, &sampler.name(), |r| {
-        project(&sampler.generate(n, &mut rng::stream(seed, r as u64)), dims, proj)
+        project(
+            &sampler.generate(n, &mut rng::stream(seed, r as u64)),
+            dims,
+            proj,
+        )
     })
 }
 
 /// The expected spectrum over every set of a stored point set.
-pub fn of_sets(sets: &PointSets, proj: Projection, res: usize, method: Method) -> Result<ExpectedSpectrum> {
-    expected_spectrum(sets.sets(), res, method, "point sets", |r| sets.project(r, proj))
+pub fn of_sets(
+    sets: &PointSets,
+    proj: Projection,
+    res: usize,
+    method: Method,
+) -> Result<ExpectedSpectrum> {
+    expected_spectrum(sets.sets(), res, method, "point sets", |r| {
+        sets.project(r, proj)
+    })
 }

@@ -93,7 +93,9 @@ pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize) -> Vec<RadialBin> {
                 stderr: var_sum[r].sqrt() / c,
                 anisotropy_db,
                 cones: (0..cones)
-                    .map(|k| (cone_count[r][k] > 0).then(|| cone_sum[r][k] / cone_count[r][k] as f64))
+                    .map(|k| {
+                        (cone_count[r][k] > 0).then(|| cone_sum[r][k] / cone_count[r][k] as f64)
+                    })
                     .collect(),
             }
         })

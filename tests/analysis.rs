@@ -32,7 +32,12 @@ const RATES: [(&str, [f64; 4]); 5] = [
     ("cmj", [-2.0, -1.5, -1.5, -3.0]),
 ];
 
-const RATE_INTEGRANDS: [&str; 4] = ["step:theta=0,c=0.5", "step:theta=30", "disc:r=0.3", "gaussian:sigma=0.15"];
+const RATE_INTEGRANDS: [&str; 4] = [
+    "step:theta=0,c=0.5",
+    "step:theta=30",
+    "disc:r=0.3",
+    "gaussian:sigma=0.15",
+];
 
 #[test]
 fn rates_of_design_section_4() {
@@ -52,13 +57,24 @@ fn rates_of_design_section_4() {
                 "{name:>9} {spec:<20} slope {:+.3} ± {:.3} (want {want:+.1}; chi2/dof {:.2})",
                 fit.slope, fit.stderr, fit.chi2_per_dof
             );
-            assert!(fit.stderr < 0.05, "{name} on {spec}: slope error {} too large for a fair test", fit.stderr);
+            assert!(
+                fit.stderr < 0.05,
+                "{name} on {spec}: slope error {} too large for a fair test",
+                fit.stderr
+            );
             if (fit.slope - want).abs() > 0.15 {
-                failures.push(format!("{name} on {spec}: slope {:.3} ± {:.3}, want {want}", fit.slope, fit.stderr));
+                failures.push(format!(
+                    "{name} on {spec}: slope {:.3} ± {:.3}, want {want}",
+                    fit.slope, fit.stderr
+                ));
             }
         }
     }
-    assert!(failures.is_empty(), "rates off by more than 0.15:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "rates off by more than 0.15:\n{}",
+        failures.join("\n")
+    );
 }
 
 #[test]
@@ -122,7 +138,10 @@ fn prediction_meets_measurement_in_4d_on_two_planes() {
     };
     let m = measure(s.as_ref(), f.as_ref(), 64, &cfg).unwrap();
     let z = (p.variance - m.mse) / (p.stderr.powi(2) + m.mse_stderr.powi(2)).sqrt();
-    eprintln!("padded-jittered 4D N=64: predicted {:.4e} ± {:.1e}, measured {:.4e} ± {:.1e}, z = {z:+.2}", p.variance, p.stderr, m.mse, m.mse_stderr);
+    eprintln!(
+        "padded-jittered 4D N=64: predicted {:.4e} ± {:.1e}, measured {:.4e} ± {:.1e}, z = {z:+.2}",
+        p.variance, p.stderr, m.mse, m.mse_stderr
+    );
     assert!(z.abs() <= 3.0, "z = {z}");
 }
 
@@ -144,12 +163,20 @@ fn nrooks_cones_aligned_versus_oblique_step() {
     let pa = predict(s.as_ref(), aligned.as_ref(), &ns, &vc).unwrap();
     for p in &pa.points {
         let share = p.cones[0] / p.grid;
-        eprintln!("aligned N={:<5} variance {:.3e} (tail {:.1e}), axis cone share {share:.4}", p.n, p.variance, p.tail.unwrap());
+        eprintln!(
+            "aligned N={:<5} variance {:.3e} (tail {:.1e}), axis cone share {share:.4}",
+            p.n,
+            p.variance,
+            p.tail.unwrap()
+        );
         assert!(share > 0.99, "N={}: axis cone share {share}", p.n);
     }
     let fit = pa.cone_fits[0].unwrap();
     let total = pa.fit.unwrap();
-    eprintln!("aligned: axis cone slope {:.3} ± {:.3}, total {:.3} ± {:.3}", fit.slope, fit.stderr, total.slope, total.stderr);
+    eprintln!(
+        "aligned: axis cone slope {:.3} ± {:.3}, total {:.3} ± {:.3}",
+        fit.slope, fit.stderr, total.slope, total.stderr
+    );
     assert!((fit.slope + 2.0).abs() < 0.15 && (total.slope + 2.0).abs() < 0.15);
 
     // 30° step: the edge's spectrum lies along 30°, in cone 1; the square's sides add axis terms
@@ -165,15 +192,25 @@ fn nrooks_cones_aligned_versus_oblique_step() {
     let off: Vec<f64> = po.points.iter().map(|p| p.cones[1] + p.cones[3]).collect();
     for (p, o) in po.points.iter().zip(&off) {
         let share = o / p.grid;
-        eprintln!("30° N={:<5} variance {:.3e}, diagonal cones share {share:.3}", p.n, p.variance);
+        eprintln!(
+            "30° N={:<5} variance {:.3e}, diagonal cones share {share:.3}",
+            p.n, p.variance
+        );
         if p.n >= 64 {
             assert!(share > 0.85, "N={}: diagonal share {share}", p.n);
         }
     }
-    let se: Vec<f64> = po.points.iter().map(|p| (p.cone_stderr[1].powi(2) + p.cone_stderr[3].powi(2)).sqrt()).collect();
+    let se: Vec<f64> = po
+        .points
+        .iter()
+        .map(|p| (p.cone_stderr[1].powi(2) + p.cone_stderr[3].powi(2)).sqrt())
+        .collect();
     let nf: Vec<f64> = ns.iter().map(|&n| n as f64).collect();
     let fit = anisospec::converge::fit_power_law(&nf, &off, &se).unwrap();
-    eprintln!("30°: diagonal cones slope {:.3} ± {:.3}", fit.slope, fit.stderr);
+    eprintln!(
+        "30°: diagonal cones slope {:.3} ± {:.3}",
+        fit.slope, fit.stderr
+    );
     assert!((fit.slope + 1.0).abs() < 0.15);
 }
 
@@ -209,9 +246,19 @@ fn random_placement_keeps_the_rate() {
         seed: 77,
         random_placement: true,
     };
-    let c = converge(sampler("jittered", 2).as_ref(), f.as_ref(), &NS, &cfg, |_| {}).unwrap();
+    let c = converge(
+        sampler("jittered", 2).as_ref(),
+        f.as_ref(),
+        &NS,
+        &cfg,
+        |_| {},
+    )
+    .unwrap();
     let fit = c.fit.unwrap();
-    eprintln!("jittered, disc placed at random: slope {:.3} ± {:.3}", fit.slope, fit.stderr);
+    eprintln!(
+        "jittered, disc placed at random: slope {:.3} ± {:.3}",
+        fit.slope, fit.stderr
+    );
     assert!((fit.slope + 1.5).abs() < 0.15);
     for p in &c.points {
         // Unbiased: the mean error is within 4 standard errors of 0 (sd of e ≈ sqrt(MSE)).
@@ -240,10 +287,27 @@ fn bad_input_is_a_usage_error_with_exit_code_2() {
     let f2 = parse("disc").unwrap();
     // A sampler whose N does not fit, a 4D sampler on a 2D integrand, too few realizations.
     for (s, n, r) in [("jittered", 15usize, 10usize), ("random", 16, 1)] {
-        let e = converge(sampler(s, 2).as_ref(), f2.as_ref(), &[n], &ConvergeConfig { realizations: r, ..cfg }, |_| {}).unwrap_err();
+        let e = converge(
+            sampler(s, 2).as_ref(),
+            f2.as_ref(),
+            &[n],
+            &ConvergeConfig {
+                realizations: r,
+                ..cfg
+            },
+            |_| {},
+        )
+        .unwrap_err();
         assert_eq!(e.exit_code(), 2, "{e}");
     }
-    let e = converge(sampler("random", 4).as_ref(), f2.as_ref(), &[16], &cfg, |_| {}).unwrap_err();
+    let e = converge(
+        sampler("random", 4).as_ref(),
+        f2.as_ref(),
+        &[16],
+        &cfg,
+        |_| {},
+    )
+    .unwrap_err();
     assert_eq!(e.exit_code(), 2);
     // The Fourier prediction of a product over two projections is refused with a pointer to converge.
     let prod = parse("gaussian@xy*gaussian@uv").unwrap();

@@ -40,7 +40,10 @@ pub struct ConvergeArgs {
 fn check_ext(path: &Option<PathBuf>, ext: &str, flag: &str) -> Result<()> {
     if let Some(p) = path {
         if p.extension().and_then(|e| e.to_str()) != Some(ext) {
-            return Err(Error::Usage(format!("{flag} {}: name the file *.{ext}", p.display())));
+            return Err(Error::Usage(format!(
+                "{flag} {}: name the file *.{ext}",
+                p.display()
+            )));
         }
     }
     Ok(())
@@ -73,7 +76,12 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         studies.push(study);
     }
     bar.finish_and_clear();
-    println!("integrand {} (integral {:.12e}), R = {}", f.name(), f.reference().value, args.realizations);
+    println!(
+        "integrand {} (integral {:.12e}), R = {}",
+        f.name(),
+        f.reference().value,
+        args.realizations
+    );
     for s in &studies {
         match &s.fit {
             Some(fit) => println!(
@@ -82,9 +90,15 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             ),
             None => println!("{}:", s.sampler),
         }
-        println!("{:>8} {:>12} {:>10} {:>10}", "N", "MSE", "stderr", "seconds");
+        println!(
+            "{:>8} {:>12} {:>10} {:>10}",
+            "N", "MSE", "stderr", "seconds"
+        );
         for p in &s.points {
-            println!("{:>8} {:>12.4e} {:>10.2e} {:>10.3}", p.n, p.mse, p.mse_stderr, p.seconds);
+            println!(
+                "{:>8} {:>12.4e} {:>10.2e} {:>10.3}",
+                p.n, p.mse, p.mse_stderr, p.seconds
+            );
         }
     }
     if let Some(out) = &args.output {

@@ -24,7 +24,10 @@ pub fn run(args: &IntegrandsArgs) -> Result<()> {
     println!("dims       {}", f.dims());
     println!("integral   {:.17e} (± {:e})", r.value, r.stderr);
     match f.mean_square() {
-        Some(m) => println!("variance   {:.10e} (of f over the domain)", m - r.value * r.value),
+        Some(m) => println!(
+            "variance   {:.10e} (of f over the domain)",
+            m - r.value * r.value
+        ),
         None => println!("variance   unknown in closed form"),
     }
     match f.spectral_planes() {
@@ -36,7 +39,10 @@ pub fn run(args: &IntegrandsArgs) -> Result<()> {
                 f.fourier_error()
             );
         }
-        None => println!("spectrum   spread over all {}D frequencies: use `anisospec converge`", f.dims()),
+        None => println!(
+            "spectrum   spread over all {}D frequencies: use `anisospec converge`",
+            f.dims()
+        ),
     }
     Ok(())
 }

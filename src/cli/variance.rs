@@ -52,12 +52,19 @@ pub struct VarianceArgs {
 pub fn run(args: &VarianceArgs) -> Result<()> {
     if let Some(out) = &args.output {
         if out.extension().and_then(|e| e.to_str()) != Some("csv") {
-            return Err(Error::Usage(format!("-o {}: the prediction is written as CSV; name it *.csv", out.display())));
+            return Err(Error::Usage(format!(
+                "-o {}: the prediction is written as CSV; name it *.csv",
+                out.display()
+            )));
         }
     }
     let f = parse(&args.integrand)?;
     let sampler = samplers::build(&args.sampler, f.dims())?;
-    let method = if args.exact { Method::Exact } else { Method::nufft(args.eps)? };
+    let method = if args.exact {
+        Method::Exact
+    } else {
+        Method::nufft(args.eps)?
+    };
     let cfg = VarianceConfig {
         res: args.res,
         res_per_n: args.res_per_n,
@@ -67,28 +74,52 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
         method,
     };
     let pred = predict(sampler.as_ref(), f.as_ref(), &args.n, &cfg)?;
-    println!("sampler {} on {} (planes {:?}, K = {}, R = {})", pred.sampler, pred.integrand,
-        pred.planes.iter().map(|p| p.name()).collect::<Vec<_>>(), args.res, args.realizations);
-    print!("{:>7} {:>12} {:>10} {:>11}", "N", "variance", "stderr", "tail");
+    println!(
+        "sampler {} on {} (planes {:?}, K = {}, R = {})",
+        pred.sampler,
+        pred.integrand,
+        pred.planes.iter().map(|p| p.name()).collect::<Vec<_>>(),
+        args.res,
+        args.realizations
+    );
+    print!(
+        "{:>7} {:>12} {:>10} {:>11}",
+        "N", "variance", "stderr", "tail"
+    );
     for c in 0..args.cones {
         print!(" {:>8}", format!("cone{c}%"));
     }
     println!();
     for p in &pred.points {
         let tail = p.tail.map_or("unknown".to_string(), |t| format!("{t:.3e}"));
-        print!("{:>7} {:>12.4e} {:>10.2e} {:>11}", p.n, p.variance, p.stderr, tail);
+        print!(
+            "{:>7} {:>12.4e} {:>10.2e} {:>11}",
+            p.n, p.variance, p.stderr, tail
+        );
         for c in &p.cones {
-            let share = if p.grid > 0.0 { 100.0 * c / p.grid } else { 0.0 };
+            let share = if p.grid > 0.0 {
+                100.0 * c / p.grid
+            } else {
+                0.0
+            };
             print!(" {share:>8.1}");
         }
         println!();
     }
     if let Some(fit) = &pred.fit {
-        println!("predicted slope {:.3} (95% CI {:.3} .. {:.3})", fit.slope, fit.ci95.0, fit.ci95.1);
+        println!(
+            "predicted slope {:.3} (95% CI {:.3} .. {:.3})",
+            fit.slope, fit.ci95.0, fit.ci95.1
+        );
     }
     for (c, fit) in pred.cone_fits.iter().enumerate() {
         if let Some(fit) = fit {
-            println!("  cone {c} ({:.0}°) slope {:.3} ± {:.3}", c as f64 * 180.0 / args.cones as f64, fit.slope, fit.stderr);
+            println!(
+                "  cone {c} ({:.0}°) slope {:.3} ± {:.3}",
+                c as f64 * 180.0 / args.cones as f64,
+                fit.slope,
+                fit.stderr
+            );
         }
     }
     if let Some(out) = &args.output {

@@ -23,9 +23,13 @@ pub struct SlopeFit {
 /// error is replaced by `1e-12 y` (a point known exactly).
 pub fn fit_power_law(n: &[f64], y: &[f64], se: &[f64]) -> Result<SlopeFit> {
     if n.len() != y.len() || n.len() != se.len() || n.len() < 2 {
-        return Err(Error::Usage("a slope fit needs at least two values of N".into()));
+        return Err(Error::Usage(
+            "a slope fit needs at least two values of N".into(),
+        ));
     }
-    if let Some(i) = (0..n.len()).find(|&i| !(n[i] > 0.0 && y[i] > 0.0 && y[i].is_finite() && se[i].is_finite())) {
+    if let Some(i) =
+        (0..n.len()).find(|&i| !(n[i] > 0.0 && y[i] > 0.0 && y[i].is_finite() && se[i].is_finite()))
+    {
         return Err(Error::Numerical(format!(
             "cannot fit a slope through N = {}, value {}: log-log fits need positive finite values",
             n[i], y[i]
@@ -48,12 +52,18 @@ pub fn fit_power_law(n: &[f64], y: &[f64], se: &[f64]) -> Result<SlopeFit> {
     let my = sy / sw;
     let sxx: f64 = w.iter().zip(&x).map(|(w, x)| w * (x - mx).powi(2)).sum();
     if x.iter().all(|&v| v == x[0]) || sxx <= 0.0 {
-        return Err(Error::Usage("a slope fit needs at least two different values of N".into()));
+        return Err(Error::Usage(
+            "a slope fit needs at least two different values of N".into(),
+        ));
     }
-    let sxy: f64 = (0..x.len()).map(|i| w[i] * (x[i] - mx) * (ly[i] - my)).sum();
+    let sxy: f64 = (0..x.len())
+        .map(|i| w[i] * (x[i] - mx) * (ly[i] - my))
+        .sum();
     let slope = sxy / sxx;
     let intercept = my - slope * mx;
-    let chi2: f64 = (0..x.len()).map(|i| w[i] * (ly[i] - intercept - slope * x[i]).powi(2)).sum();
+    let chi2: f64 = (0..x.len())
+        .map(|i| w[i] * (ly[i] - intercept - slope * x[i]).powi(2))
+        .sum();
     let dof = x.len() as f64 - 2.0;
     let chi2_per_dof = if dof > 0.0 { chi2 / dof } else { 0.0 };
     let stderr = (1.0 / sxx).sqrt() * chi2_per_dof.max(1.0).sqrt();

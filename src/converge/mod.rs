@@ -63,7 +63,12 @@ pub struct Convergence {
 }
 
 /// Checks a list of `N` and a realization count shared by the variance and convergence studies.
-pub fn check_plan(sampler: &dyn Sampler, f: &dyn Integrand, ns: &[usize], realizations: usize) -> Result<()> {
+pub fn check_plan(
+    sampler: &dyn Sampler,
+    f: &dyn Integrand,
+    ns: &[usize],
+    realizations: usize,
+) -> Result<()> {
     if sampler.dims() != f.dims() {
         return Err(Error::Usage(format!(
             "the sampler {} makes {}D points but the integrand {} is {}D; use a {}D sampler (e.g. padded-... for 4D) or place the integrand with @xy",
@@ -75,7 +80,9 @@ pub fn check_plan(sampler: &dyn Sampler, f: &dyn Integrand, ns: &[usize], realiz
         )));
     }
     if ns.is_empty() {
-        return Err(Error::Usage("--n lists no sizes; give e.g. --n 16,64,256".into()));
+        return Err(Error::Usage(
+            "--n lists no sizes; give e.g. --n 16,64,256".into(),
+        ));
     }
     if realizations < 2 {
         return Err(Error::Usage(format!(
@@ -89,7 +96,13 @@ pub fn check_plan(sampler: &dyn Sampler, f: &dyn Integrand, ns: &[usize], realiz
 }
 
 /// The error `I_N − I` of realization `r` at size `n`.
-pub fn realization_error(sampler: &dyn Sampler, f: &dyn Integrand, n: usize, r: usize, cfg: &ConvergeConfig) -> f64 {
+pub fn realization_error(
+    sampler: &dyn Sampler,
+    f: &dyn Integrand,
+    n: usize,
+    r: usize,
+    cfg: &ConvergeConfig,
+) -> f64 {
     let key = 3 * n as u64;
     let mut set = sampler.generate(n, &mut rng::substream(cfg.seed, r as u64, key));
     let dims = sampler.dims();
@@ -107,7 +120,12 @@ pub fn realization_error(sampler: &dyn Sampler, f: &dyn Integrand, n: usize, r: 
 }
 
 /// The mean squared error and its standard error at one `N`.
-pub fn measure(sampler: &dyn Sampler, f: &dyn Integrand, n: usize, cfg: &ConvergeConfig) -> Result<ConvergePoint> {
+pub fn measure(
+    sampler: &dyn Sampler,
+    f: &dyn Integrand,
+    n: usize,
+    cfg: &ConvergeConfig,
+) -> Result<ConvergePoint> {
     check_plan(sampler, f, &[n], cfg.realizations)?;
     let start = Instant::now();
     let errors: Vec<f64> = (0..cfg.realizations)
@@ -190,7 +208,11 @@ pub fn write_csv(path: &std::path::Path, studies: &[Convergence]) -> Result<()> 
         writeln!(w, "{}", CSV_HEADER.join(","))?;
         for s in studies {
             let (slope, lo, hi) = match &s.fit {
-                Some(f) => (f.slope.to_string(), f.ci95.0.to_string(), f.ci95.1.to_string()),
+                Some(f) => (
+                    f.slope.to_string(),
+                    f.ci95.0.to_string(),
+                    f.ci95.1.to_string(),
+                ),
                 None => (String::new(), String::new(), String::new()),
             };
             for p in &s.points {
@@ -229,7 +251,10 @@ pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Res
         .iter()
         .map(|s| Series {
             label: match &s.fit {
-                Some(f) => format!("{}: slope {:.2} [{:.2}, {:.2}]", s.sampler, f.slope, f.ci95.0, f.ci95.1),
+                Some(f) => format!(
+                    "{}: slope {:.2} [{:.2}, {:.2}]",
+                    s.sampler, f.slope, f.ci95.0, f.ci95.1
+                ),
                 None => s.sampler.clone(),
             },
             points: s.points.iter().map(|p| (p.n as f64, p.mse)).collect(),

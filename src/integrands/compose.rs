@@ -48,7 +48,11 @@ impl Integrand for Embed {
     fn fourier(&self, k: &[i64]) -> Option<Complex64> {
         let off_plane = (0..4).any(|d| d != self.proj.a && d != self.proj.b && k[d] != 0);
         let g = self.inner.fourier(&[k[self.proj.a], k[self.proj.b]])?;
-        Some(if off_plane { Complex64::new(0.0, 0.0) } else { g })
+        Some(if off_plane {
+            Complex64::new(0.0, 0.0)
+        } else {
+            g
+        })
     }
     fn fourier_error(&self) -> f64 {
         self.inner.fourier_error()
@@ -120,7 +124,11 @@ impl Sum {
 
 impl Integrand for Sum {
     fn name(&self) -> String {
-        self.terms.iter().map(|t| t.name()).collect::<Vec<_>>().join("+")
+        self.terms
+            .iter()
+            .map(|t| t.name())
+            .collect::<Vec<_>>()
+            .join("+")
     }
     fn dims(&self) -> usize {
         self.terms[0].dims()
@@ -211,7 +219,11 @@ impl Product {
 
 impl Integrand for Product {
     fn name(&self) -> String {
-        self.factors.iter().map(|t| t.name()).collect::<Vec<_>>().join("*")
+        self.factors
+            .iter()
+            .map(|t| t.name())
+            .collect::<Vec<_>>()
+            .join("*")
     }
     fn dims(&self) -> usize {
         self.factors[0].dims()
@@ -225,7 +237,12 @@ impl Integrand for Product {
         // First-order propagation of independent errors.
         let var: f64 = (0..r.len())
             .map(|i| {
-                let others: f64 = r.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, r)| r.value).product();
+                let others: f64 = r
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != i)
+                    .map(|(_, r)| r.value)
+                    .product();
                 (r[i].stderr * others).powi(2)
             })
             .sum();
@@ -238,19 +255,31 @@ impl Integrand for Product {
         let mut total = Complex64::new(1.0, 0.0);
         for f in &self.factors {
             let support = f.support();
-            let masked: Vec<i64> = (0..k.len()).map(|d| if support.contains(&d) { k[d] } else { 0 }).collect();
+            let masked: Vec<i64> = (0..k.len())
+                .map(|d| if support.contains(&d) { k[d] } else { 0 })
+                .collect();
             total *= f.fourier(&masked)?;
         }
         Some(total)
     }
     fn fourier_error(&self) -> f64 {
         // |Π a_i − Π b_i| ≤ Σ_i err_i Π_{j≠i} max|a_j|, and |f̂_j| ≤ ∫|f_j| ≤ sqrt(∫f_j²).
-        let bounds: Vec<f64> = self.factors.iter().map(|f| f.mean_square().map_or(1.0, f64::sqrt)).collect();
+        let bounds: Vec<f64> = self
+            .factors
+            .iter()
+            .map(|f| f.mean_square().map_or(1.0, f64::sqrt))
+            .collect();
         self.factors
             .iter()
             .enumerate()
             .map(|(i, f)| {
-                f.fourier_error() * bounds.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, b)| b).product::<f64>()
+                f.fourier_error()
+                    * bounds
+                        .iter()
+                        .enumerate()
+                        .filter(|(j, _)| *j != i)
+                        .map(|(_, b)| b)
+                        .product::<f64>()
             })
             .sum()
     }

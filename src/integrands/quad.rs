@@ -47,7 +47,14 @@ fn legendre(m: usize, x: f64) -> (f64, f64) {
 
 /// `∫_a^b g` by the Gauss–Legendre `rule` on `panels` equal panels, with the interval first cut at the
 /// `breaks` that fall inside it (where `g` has a kink, so that every panel sees a smooth function).
-pub fn integrate<T, G>(rule: &[(f64, f64)], a: f64, b: f64, breaks: &[f64], panels: usize, mut g: G) -> T
+pub fn integrate<T, G>(
+    rule: &[(f64, f64)],
+    a: f64,
+    b: f64,
+    breaks: &[f64],
+    panels: usize,
+    mut g: G,
+) -> T
 where
     T: std::ops::Add<Output = T> + std::ops::Mul<f64, Output = T> + Default,
     G: FnMut(f64) -> T,

@@ -16,7 +16,9 @@ fn finite(name: &str, key: &str, v: f64) -> Result<f64> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(Error::Usage(format!("{name}: {key}={v} is not a finite number")))
+        Err(Error::Usage(format!(
+            "{name}: {key}={v} is not a finite number"
+        )))
     }
 }
 
@@ -74,11 +76,12 @@ impl Gaussian {
             d -= 1.0;
         }
         let s2 = 2.0 * self.sigma * self.sigma;
+        // Terms beyond |t|² = 40·s2 are below exp(−40) of the peak: skip them.
+        let cut = 40.0 * s2;
         (-self.images..=self.images)
-            .map(|m| {
-                let t = d + m as f64;
-                (-t * t / s2).exp()
-            })
+            .map(|m| d + m as f64)
+            .filter(|t| t * t < cut)
+            .map(|t| (-t * t / s2).exp())
             .sum()
     }
 
@@ -121,7 +124,11 @@ impl Integrand for Gaussian {
     }
     fn fourier(&self, k: &[i64]) -> Option<Complex64> {
         let kk = (k[0] * k[0] + k[1] * k[1]) as f64;
-        let amp = 2.0 * PI * self.sigma * self.sigma * (-2.0 * PI * PI * self.sigma * self.sigma * kk).exp();
+        let amp = 2.0
+            * PI
+            * self.sigma
+            * self.sigma
+            * (-2.0 * PI * PI * self.sigma * self.sigma * kk).exp();
         Some(phase(k2(k), self.centre) * amp)
     }
     fn mean_square(&self) -> Option<f64> {
@@ -169,7 +176,10 @@ impl Disc {
 
 impl Integrand for Disc {
     fn name(&self) -> String {
-        format!("disc:r={},cx={},cy={}", self.r, self.centre[0], self.centre[1])
+        format!(
+            "disc:r={},cx={},cy={}",
+            self.r, self.centre[0], self.centre[1]
+        )
     }
     fn dims(&self) -> usize {
         2
@@ -210,7 +220,10 @@ impl Integrand for Disc {
 /// `n·x = c` crosses the square.
 fn corner_range(n: [f64; 2]) -> (f64, f64) {
     let v = [0.0, n[0], n[1], n[0] + n[1]];
-    (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+    (
+        v.iter().copied().fold(f64::INFINITY, f64::min),
+        v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    )
 }
 
 /// What a [`HalfPlane`] is called and how it was parametrized, for its name.
@@ -244,7 +257,12 @@ impl HalfPlane {
     /// An oriented step at angle `theta_deg` (degrees) with offset `c` (`None`: through the centre).
     pub fn oriented(theta_deg: f64, c: Option<f64>) -> Result<Self> {
         let t = finite("step", "theta", theta_deg)?.to_radians();
-        Self::build(EdgeKind::Oriented { theta_deg }, [t.cos(), t.sin()], c, "step")
+        Self::build(
+            EdgeKind::Oriented { theta_deg },
+            [t.cos(), t.sin()],
+            c,
+            "step",
+        )
     }
 
     /// The sheared step `x1 + s x2 < c` (`None`: the edge through the centre, `c = (1 + s)/2`).
@@ -284,7 +302,9 @@ impl Integrand for HalfPlane {
         2
     }
     fn eval(&self, x: &[f64]) -> f64 {
-        f64::from(u8::from(self.normal[0] * x[0] + self.normal[1] * x[1] < self.c))
+        f64::from(u8::from(
+            self.normal[0] * x[0] + self.normal[1] * x[1] < self.c,
+        ))
     }
     fn reference(&self) -> Reference {
         Reference {
@@ -407,13 +427,22 @@ impl Fan {
         let len = self.s1 - self.s0;
         // A vertex of the step moves at speed up to 1/min(c, 1−c, 1) in s: the phase turns by about
         // 2π |k|₁ · speed · len over the range; give each panel about one turn.
-        let speed = 1.0 / self.c.clamp(0.02, 1.0).min((1.0 - self.c).abs().clamp(0.02, 1.0));
+        let speed = 1.0
+            / self
+                .c
+                .clamp(0.02, 1.0)
+                .min((1.0 - self.c).abs().clamp(0.02, 1.0));
         let turns = (k[0].unsigned_abs() + k[1].unsigned_abs()) as f64 * speed * len;
         let panels = refine * (2 + turns.ceil() as usize);
         let rule = quad::gauss_legendre(FAN_RULE);
-        let sum: Complex64 = quad::integrate(&rule, self.s0, self.s1, &[self.c, self.c - 1.0], panels, |s| {
-            polygon::fourier(&polygon::clip_square([1.0, s], self.c), k)
-        });
+        let sum: Complex64 = quad::integrate(
+            &rule,
+            self.s0,
+            self.s1,
+            &[self.c, self.c - 1.0],
+            panels,
+            |s| polygon::fourier(&polygon::clip_square([1.0, s], self.c), k),
+        );
         sum / len
     }
 }
@@ -499,7 +528,10 @@ mod tests {
             assert!((s * h * h - g.fourier(&k).unwrap()).norm() < 1e-13);
         }
         // Both branches of the theta sum agree near the switch.
-        let (a, b) = (Gaussian::new(0.2499, [0.5; 2]).unwrap(), Gaussian::new(0.25, [0.5; 2]).unwrap());
+        let (a, b) = (
+            Gaussian::new(0.2499, [0.5; 2]).unwrap(),
+            Gaussian::new(0.25, [0.5; 2]).unwrap(),
+        );
         assert!((a.theta_sum() - b.theta_sum()).abs() < 1e-3);
     }
 
@@ -550,7 +582,10 @@ mod tests {
                 worst = worst.max((a - b).norm());
             }
         }
-        assert!(worst < FAN_FOURIER_ERROR, "fan f̂ quadrature error {worst:e}");
+        assert!(
+            worst < FAN_FOURIER_ERROR,
+            "fan f̂ quadrature error {worst:e}"
+        );
         // Parseval: Σ|f̂|² ≤ ∫f² − (∫f)².
         let mut s = 0.0;
         for k1 in -24i64..=24 {

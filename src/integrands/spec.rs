@@ -47,23 +47,39 @@ pub struct Family {
 }
 
 fn build_gaussian(p: &Params) -> Result<Box<dyn Integrand>> {
-    Ok(Box::new(Gaussian::new(p.get_or("sigma", 0.15), [p.get_or("cx", 0.5), p.get_or("cy", 0.5)])?))
+    Ok(Box::new(Gaussian::new(
+        p.get_or("sigma", 0.15),
+        [p.get_or("cx", 0.5), p.get_or("cy", 0.5)],
+    )?))
 }
 
 fn build_disc(p: &Params) -> Result<Box<dyn Integrand>> {
-    Ok(Box::new(Disc::new(p.get_or("r", 0.3), [p.get_or("cx", 0.5), p.get_or("cy", 0.5)])?))
+    Ok(Box::new(Disc::new(
+        p.get_or("r", 0.3),
+        [p.get_or("cx", 0.5), p.get_or("cy", 0.5)],
+    )?))
 }
 
 fn build_step(p: &Params) -> Result<Box<dyn Integrand>> {
-    Ok(Box::new(HalfPlane::oriented(p.get_or("theta", 0.0), p.get("c"))?))
+    Ok(Box::new(HalfPlane::oriented(
+        p.get_or("theta", 0.0),
+        p.get("c"),
+    )?))
 }
 
 fn build_sheared(p: &Params) -> Result<Box<dyn Integrand>> {
-    Ok(Box::new(HalfPlane::sheared(p.get_or("s", 0.5), p.get("c"))?))
+    Ok(Box::new(HalfPlane::sheared(
+        p.get_or("s", 0.5),
+        p.get("c"),
+    )?))
 }
 
 fn build_fan(p: &Params) -> Result<Box<dyn Integrand>> {
-    Ok(Box::new(Fan::new(p.get_or("s0", 0.3), p.get_or("s1", 0.7), p.get("c"))?))
+    Ok(Box::new(Fan::new(
+        p.get_or("s0", 0.3),
+        p.get_or("s1", 0.7),
+        p.get("c"),
+    )?))
 }
 
 /// Every integrand family the parser knows.
@@ -155,7 +171,9 @@ pub fn parse(spec: &str) -> Result<Box<dyn Integrand>> {
     if terms.len() == 1 {
         return Ok(terms.pop().expect("one term"));
     }
-    Ok(Box::new(Sum::new(terms.into_iter().map(Arc::from).collect())?))
+    Ok(Box::new(Sum::new(
+        terms.into_iter().map(Arc::from).collect(),
+    )?))
 }
 
 /// Splits at `+` signs that are not an exponent's sign (`1e+3`).
@@ -164,7 +182,8 @@ fn split_plus(spec: &str) -> Vec<&str> {
     let mut parts = Vec::new();
     let mut start = 0;
     for (i, &b) in bytes.iter().enumerate() {
-        let exponent = i > 0 && matches!(bytes[i - 1], b'e' | b'E') && i > 1 && bytes[i - 2].is_ascii_digit();
+        let exponent =
+            i > 0 && matches!(bytes[i - 1], b'e' | b'E') && i > 1 && bytes[i - 2].is_ascii_digit();
         if b == b'+' && !exponent {
             parts.push(&spec[start..i]);
             start = i + 1;
@@ -227,13 +246,23 @@ fn parse_params(fam: &Family, list: &str) -> Result<Params> {
             )));
         }
         if values.iter().any(|(k, _)| k == key) {
-            return Err(Error::Usage(format!("{}: key '{key}' is given twice", fam.name)));
+            return Err(Error::Usage(format!(
+                "{}: key '{key}' is given twice",
+                fam.name
+            )));
         }
         let v: f64 = value.trim().parse().map_err(|_| {
-            Error::Usage(format!("{}: {key}={} is not a number", fam.name, value.trim()))
+            Error::Usage(format!(
+                "{}: {key}={} is not a number",
+                fam.name,
+                value.trim()
+            ))
         })?;
         if !v.is_finite() {
-            return Err(Error::Usage(format!("{}: {key}={v} is not a finite number", fam.name)));
+            return Err(Error::Usage(format!(
+                "{}: {key}={v} is not a finite number",
+                fam.name
+            )));
         }
         values.push((key.to_string(), v));
     }
@@ -268,14 +297,22 @@ mod tests {
         assert!((f.reference().value - 0.5).abs() < 1e-15);
         let g = parse("sheared:s=0.5@xu + sheared:s=0.5@yv").unwrap();
         assert_eq!(g.dims(), 4);
-        assert_eq!(g.spectral_planes().unwrap(), vec![Projection::XU, Projection::YV]);
+        assert_eq!(
+            g.spectral_planes().unwrap(),
+            vec![Projection::XU, Projection::YV]
+        );
         assert!((g.reference().value - 1.0).abs() < 1e-15);
         assert_eq!(g.eval(&[0.1, 0.9, 0.2, 0.9]), 1.0);
         let p = parse("gaussian:sigma=0.1@xy*disc:r=0.2@uv").unwrap();
         let r = p.reference().value;
-        assert!((r - 2.0 * std::f64::consts::PI * 0.01 * std::f64::consts::PI * 0.04).abs() < 1e-15);
+        assert!(
+            (r - 2.0 * std::f64::consts::PI * 0.01 * std::f64::consts::PI * 0.04).abs() < 1e-15
+        );
         // f̂ of a product at a 4D frequency is the product of the factors' coefficients.
-        let (a, b) = (parse("gaussian:sigma=0.1").unwrap(), parse("disc:r=0.2").unwrap());
+        let (a, b) = (
+            parse("gaussian:sigma=0.1").unwrap(),
+            parse("disc:r=0.2").unwrap(),
+        );
         let want = a.fourier(&[1, 2]).unwrap() * b.fourier(&[3, -1]).unwrap();
         assert!((p.fourier(&[1, 2, 3, -1]).unwrap() - want).norm() < 1e-15);
         assert!(p.spectral_planes().is_none());

@@ -42,7 +42,11 @@ static FONT: Once = Once::new();
 fn register_font() {
     FONT.call_once(|| {
         // The embedded font is valid; a failure here would only lose text, never the plot.
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            dejavu::sans::regular(),
+        );
     });
 }
 
@@ -54,11 +58,17 @@ fn plot_error(path: &Path, e: impl std::fmt::Display) -> Error {
 fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     let (lo, hi) = values
         .filter(|v| v.is_finite() && *v > 0.0)
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
     if !lo.is_finite() {
         return None;
     }
-    let (lo, hi) = if hi > lo { (lo, hi) } else { (lo / 2.0, hi * 2.0) };
+    let (lo, hi) = if hi > lo {
+        (lo, hi)
+    } else {
+        (lo / 2.0, hi * 2.0)
+    };
     let pad = ((hi / lo).log10() * 0.05).max(0.05);
     Some((lo / 10f64.powf(pad), hi * 10f64.powf(pad)))
 }
@@ -67,13 +77,20 @@ fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
 pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
     register_font();
     let keep = |&(x, y): &(f64, f64)| x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite();
-    let xs = plot.series.iter().flat_map(|s| s.points.iter().filter(|p| keep(p)).map(|p| p.0));
+    let xs = plot
+        .series
+        .iter()
+        .flat_map(|s| s.points.iter().filter(|p| keep(p)).map(|p| p.0));
     let ys = plot.series.iter().flat_map(|s| {
         let errs = s.errors.clone().unwrap_or_default();
-        s.points.iter().enumerate().filter(|(_, p)| keep(p)).flat_map(move |(i, p)| {
-            let e = errs.get(i).copied().unwrap_or(0.0);
-            [p.1, p.1 + e, if p.1 - e > 0.0 { p.1 - e } else { p.1 }]
-        })
+        s.points
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| keep(p))
+            .flat_map(move |(i, p)| {
+                let e = errs.get(i).copied().unwrap_or(0.0);
+                [p.1, p.1 + e, if p.1 - e > 0.0 { p.1 - e } else { p.1 }]
+            })
     });
     let (Some((x0, x1)), Some((y0, y1))) = (log_range(xs), log_range(ys)) else {
         return Err(Error::Numerical(format!(
@@ -84,7 +101,8 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
     let (w, h) = (plot.width as usize, plot.height as usize);
     let mut buffer = vec![0u8; w * h * 3];
     {
-        let root = BitMapBackend::with_buffer(&mut buffer, (plot.width, plot.height)).into_drawing_area();
+        let root =
+            BitMapBackend::with_buffer(&mut buffer, (plot.width, plot.height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_error(path, e))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(&plot.title, ("sans-serif", 22))
@@ -112,22 +130,31 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
                     .draw_series(DashedLineSeries::new(pts.clone(), 8, 6, style))
                     .map_err(|e| plot_error(path, e))?
                     .label(&s.label)
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                    });
             } else {
                 chart
                     .draw_series(LineSeries::new(pts.clone(), style))
                     .map_err(|e| plot_error(path, e))?
                     .label(&s.label)
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                    });
                 chart
                     .draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled())))
                     .map_err(|e| plot_error(path, e))?;
             }
             if let Some(errs) = &s.errors {
-                let bars = s.points.iter().zip(errs).filter(|(p, _)| keep(p)).map(|(&(x, y), &e)| {
-                    let lo = if y - e > 0.0 { y - e } else { y0 };
-                    PathElement::new(vec![(x, lo), (x, y + e)], colour.stroke_width(1))
-                });
+                let bars =
+                    s.points
+                        .iter()
+                        .zip(errs)
+                        .filter(|(p, _)| keep(p))
+                        .map(|(&(x, y), &e)| {
+                            let lo = if y - e > 0.0 { y - e } else { y0 };
+                            PathElement::new(vec![(x, lo), (x, y + e)], colour.stroke_width(1))
+                        });
                 chart.draw_series(bars).map_err(|e| plot_error(path, e))?;
             }
         }
@@ -174,7 +201,8 @@ mod tests {
             height: 480,
         };
         write_loglog_png(&path, &plot).unwrap();
-        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
+        let decoder =
+            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
         let mut reader = decoder.read_info().unwrap();
         let mut buf = vec![0; reader.output_buffer_size().unwrap()];
         let info = reader.next_frame(&mut buf).unwrap();
@@ -183,8 +211,18 @@ mod tests {
         let non_white = buf.chunks(3).filter(|p| p != &[255, 255, 255]).count();
         assert!(non_white > 5000, "{non_white}");
         // The title row area holds dark text pixels (the embedded font renders).
-        let dark_in_title = buf[..640 * 3 * 30].chunks(3).filter(|p| p[0] < 100 && p[1] < 100 && p[2] < 100).count();
+        let dark_in_title = buf[..640 * 3 * 30]
+            .chunks(3)
+            .filter(|p| p[0] < 100 && p[1] < 100 && p[2] < 100)
+            .count();
         assert!(dark_in_title > 20, "{dark_in_title}");
-        assert!(write_loglog_png(&path, &LogLogPlot { series: vec![], ..plot }).is_err());
+        assert!(write_loglog_png(
+            &path,
+            &LogLogPlot {
+                series: vec![],
+                ..plot
+            }
+        )
+        .is_err());
     }
 }

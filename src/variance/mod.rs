@@ -135,7 +135,11 @@ fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spe
         list.retain(|e| e.1 > NEGLIGIBLE * max_w);
     }
     let total = active.iter().flatten().map(|e| e.1).sum();
-    Ok(Spectrum { planes, active, total })
+    Ok(Spectrum {
+        planes,
+        active,
+        total,
+    })
 }
 
 /// `exp(−2πi k c)` for each `k` of `ks`: runs of consecutive `k` by recurrence, recomputed directly
@@ -164,7 +168,12 @@ fn phases(c: f64, ks: &[i64]) -> Vec<Complex64> {
 
 /// `|F(k)|² / N` at the active frequencies of one plane: the full-grid sums when most of the grid is
 /// active, else exact sums at the active frequencies only.
-fn power_at(points: &[[f64; 2]], res: usize, active: &[(usize, f64, usize)], method: Method) -> Vec<f64> {
+fn power_at(
+    points: &[[f64; 2]],
+    res: usize,
+    active: &[(usize, f64, usize)],
+    method: Method,
+) -> Vec<f64> {
     let n = points.len() as f64;
     if active.len() * 4 > res * res {
         let sums = fourier_sums(points, res, method);
@@ -186,7 +195,10 @@ fn power_at(points: &[[f64; 2]], res: usize, active: &[(usize, f64, usize)], met
             k2s.push(i as i64 - half);
         }
     }
-    let at: Vec<(usize, usize)> = active.iter().map(|e| (col[e.0 % res], row[e.0 / res])).collect();
+    let at: Vec<(usize, usize)> = active
+        .iter()
+        .map(|e| (col[e.0 % res], row[e.0 / res]))
+        .collect();
     let mut sums = vec![Complex64::new(0.0, 0.0); active.len()];
     for p in points {
         let (e1, e2) = (phases(p[0], &k1s), phases(p[1], &k2s));
@@ -200,13 +212,21 @@ fn power_at(points: &[[f64; 2]], res: usize, active: &[(usize, f64, usize)], met
 fn check_config(cfg: &VarianceConfig) -> Result<()> {
     check_res(cfg.res)?;
     if cfg.cones == 0 {
-        return Err(Error::Usage("--cones 0: use at least one cone (1 = no split)".into()));
+        return Err(Error::Usage(
+            "--cones 0: use at least one cone (1 = no split)".into(),
+        ));
     }
     Ok(())
 }
 
 /// Per-realization `(V_r, V_r per cone)` at size `n`.
-fn realizations(sampler: &dyn Sampler, spec: &Spectrum, n: usize, res: usize, cfg: &VarianceConfig) -> Vec<(f64, Vec<f64>)> {
+fn realizations(
+    sampler: &dyn Sampler,
+    spec: &Spectrum,
+    n: usize,
+    res: usize,
+    cfg: &VarianceConfig,
+) -> Vec<(f64, Vec<f64>)> {
     (0..cfg.realizations)
         .into_par_iter()
         .map(|r| {
@@ -235,7 +255,12 @@ fn mean_se(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
 }
 
 /// Predicts the variance of `sampler` on `f` for every `N` of `ns`.
-pub fn predict(sampler: &dyn Sampler, f: &dyn Integrand, ns: &[usize], cfg: &VarianceConfig) -> Result<VariancePrediction> {
+pub fn predict(
+    sampler: &dyn Sampler,
+    f: &dyn Integrand,
+    ns: &[usize],
+    cfg: &VarianceConfig,
+) -> Result<VariancePrediction> {
     check_plan(sampler, f, ns, cfg.realizations)?;
     check_config(cfg)?;
     let planes = f.spectral_planes().unwrap_or_default();
@@ -243,7 +268,9 @@ pub fn predict(sampler: &dyn Sampler, f: &dyn Integrand, ns: &[usize], cfg: &Var
     let mut points = Vec::with_capacity(ns.len());
     let mut spec: Option<(usize, Spectrum)> = None;
     for &n in ns {
-        let res = cfg.res_per_n.map_or(cfg.res, |m| cfg.res.max((m * n).div_ceil(2) * 2));
+        let res = cfg
+            .res_per_n
+            .map_or(cfg.res, |m| cfg.res.max((m * n).div_ceil(2) * 2));
         if spec.as_ref().is_none_or(|s| s.0 != res) {
             spec = Some((res, integrand_spectrum(f, res, cfg.cones)?));
         }
@@ -297,7 +324,13 @@ pub fn write_csv(path: &std::path::Path, pred: &VariancePrediction) -> Result<()
     use std::io::Write;
     let cones = pred.points.first().map_or(0, |p| p.cones.len());
     crate::output::write_atomic(path, |w| {
-        let mut header = vec!["n".to_string(), "variance".into(), "stderr".into(), "grid".into(), "tail".into()];
+        let mut header = vec![
+            "n".to_string(),
+            "variance".into(),
+            "stderr".into(),
+            "grid".into(),
+            "tail".into(),
+        ];
         for c in 0..cones {
             header.push(format!("cone_{c}"));
             header.push(format!("cone_{c}_stderr"));

@@ -1,8 +1,11 @@
 //! The command-line front end: one module per subcommand, each a clap `Args` struct and a `run`.
 
+pub mod converge;
 pub mod gallery;
+pub mod integrands;
 pub mod sample;
 pub mod spectrum;
+pub mod variance;
 
 use crate::error::{Error, Result};
 use crate::points::shear::ShearMode;

@@ -51,7 +51,7 @@ pub fn fit_power_law(n: &[f64], y: &[f64], se: &[f64]) -> Result<SlopeFit> {
     let mx = sx / sw;
     let my = sy / sw;
     let sxx: f64 = w.iter().zip(&x).map(|(w, x)| w * (x - mx).powi(2)).sum();
-    if sxx <= 0.0 {
+    if x.iter().all(|&v| v == x[0]) || sxx <= 0.0 {
         return Err(Error::Usage(
             "a slope fit needs at least two different values of N".into(),
         ));

@@ -26,6 +26,11 @@ use std::f64::consts::TAU;
 pub struct VarianceConfig {
     /// Frequency grid `K` (even): `k1, k2 ∈ {−K/2 … K/2−1}` in each plane.
     pub res: usize,
+    /// If set to `m`, the grid at size `N` is `max(res, m·N)` (rounded up to even): a discontinuous
+    /// integrand's variance under a stratified sampler comes from `|k|` up to a few `N`, so a grid that
+    /// grows with `N` keeps the white-noise tail estimate honest. Cheap when `f̂` is sparse (an aligned
+    /// edge lives on one axis); `O(N K²)` otherwise.
+    pub res_per_n: Option<usize>,
     /// Realizations of the sampler over which `E[P]` is averaged (at least 2).
     pub realizations: usize,
     /// Number of directional cones (cone `c` centred on `c·180°/cones`; cone 0 holds the `k1` axis).
@@ -137,15 +142,28 @@ fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spe
     })
 }
 
-/// `exp(−2πi k c)` for each `k` of `ks`, argument reduced mod 1.
+/// `exp(−2πi k c)` for each `k` of `ks`: runs of consecutive `k` by recurrence, recomputed directly
+/// (argument reduced mod 1) every 32 steps so that rounding cannot drift.
 fn phases(c: f64, ks: &[i64]) -> Vec<Complex64> {
-    ks.iter()
-        .map(|&k| {
-            let t = (k as f64 * c).rem_euclid(1.0);
-            let (s, co) = (TAU * t).sin_cos();
-            Complex64::new(co, -s)
-        })
-        .collect()
+    let direct = |k: i64| {
+        let t = (k as f64 * c).rem_euclid(1.0);
+        let (s, co) = (TAU * t).sin_cos();
+        Complex64::new(co, -s)
+    };
+    let step = direct(1);
+    let mut out: Vec<Complex64> = Vec::with_capacity(ks.len());
+    let mut run = 0usize;
+    for (i, &k) in ks.iter().enumerate() {
+        let next = if i > 0 && ks[i - 1] + 1 == k && run < 32 {
+            run += 1;
+            out[i - 1] * step
+        } else {
+            run = 0;
+            direct(k)
+        };
+        out.push(next);
+    }
+    out
 }
 
 /// `|F(k)|² / N` at the active frequencies of one plane: the full-grid sums when most of the grid is
@@ -206,6 +224,7 @@ fn realizations(
     sampler: &dyn Sampler,
     spec: &Spectrum,
     n: usize,
+    res: usize,
     cfg: &VarianceConfig,
 ) -> Vec<(f64, Vec<f64>)> {
     (0..cfg.realizations)
@@ -218,7 +237,7 @@ fn realizations(
                     continue;
                 }
                 let pts = project(&set, sampler.dims(), *p);
-                let power = power_at(&pts, cfg.res, active, cfg.method);
+                let power = power_at(&pts, res, active, cfg.method);
                 for (e, pk) in active.iter().zip(power) {
                     cones[e.2] += e.1 * pk / n as f64;
                 }
@@ -244,11 +263,19 @@ pub fn predict(
 ) -> Result<VariancePrediction> {
     check_plan(sampler, f, ns, cfg.realizations)?;
     check_config(cfg)?;
-    let spec = integrand_spectrum(f, cfg.res, cfg.cones)?;
+    let planes = f.spectral_planes().unwrap_or_default();
     let var_f = f.mean_square().map(|m| m - f.reference().value.powi(2));
     let mut points = Vec::with_capacity(ns.len());
+    let mut spec: Option<(usize, Spectrum)> = None;
     for &n in ns {
-        let per = realizations(sampler, &spec, n, cfg);
+        let res = cfg
+            .res_per_n
+            .map_or(cfg.res, |m| cfg.res.max((m * n).div_ceil(2) * 2));
+        if spec.as_ref().is_none_or(|s| s.0 != res) {
+            spec = Some((res, integrand_spectrum(f, res, cfg.cones)?));
+        }
+        let spec = &spec.as_ref().expect("computed above").1;
+        let per = realizations(sampler, spec, n, res, cfg);
         let (grid, stderr) = mean_se(per.iter().map(|p| p.0));
         let mut cones = Vec::with_capacity(cfg.cones);
         let mut cone_stderr = Vec::with_capacity(cfg.cones);
@@ -284,10 +311,10 @@ pub fn predict(
     Ok(VariancePrediction {
         sampler: sampler.name(),
         integrand: f.name(),
-        planes: spec.planes,
         points,
         fit,
         cone_fits,
+        planes,
     })
 }
 

@@ -24,21 +24,66 @@ use std::sync::Arc;
 macro_rules! with_width {
     ($w:expr, $W:ident => $body:expr) => {
         match $w {
-            2 => { const $W: usize = 2; $body }
-            3 => { const $W: usize = 3; $body }
-            4 => { const $W: usize = 4; $body }
-            5 => { const $W: usize = 5; $body }
-            6 => { const $W: usize = 6; $body }
-            7 => { const $W: usize = 7; $body }
-            8 => { const $W: usize = 8; $body }
-            9 => { const $W: usize = 9; $body }
-            10 => { const $W: usize = 10; $body }
-            11 => { const $W: usize = 11; $body }
-            12 => { const $W: usize = 12; $body }
-            13 => { const $W: usize = 13; $body }
-            14 => { const $W: usize = 14; $body }
-            15 => { const $W: usize = 15; $body }
-            16 => { const $W: usize = 16; $body }
+            2 => {
+                const $W: usize = 2;
+                $body
+            }
+            3 => {
+                const $W: usize = 3;
+                $body
+            }
+            4 => {
+                const $W: usize = 4;
+                $body
+            }
+            5 => {
+                const $W: usize = 5;
+                $body
+            }
+            6 => {
+                const $W: usize = 6;
+                $body
+            }
+            7 => {
+                const $W: usize = 7;
+                $body
+            }
+            8 => {
+                const $W: usize = 8;
+                $body
+            }
+            9 => {
+                const $W: usize = 9;
+                $body
+            }
+            10 => {
+                const $W: usize = 10;
+                $body
+            }
+            11 => {
+                const $W: usize = 11;
+                $body
+            }
+            12 => {
+                const $W: usize = 12;
+                $body
+            }
+            13 => {
+                const $W: usize = 13;
+                $body
+            }
+            14 => {
+                const $W: usize = 14;
+                $body
+            }
+            15 => {
+                const $W: usize = 15;
+                $body
+            }
+            16 => {
+                const $W: usize = 16;
+                $body
+            }
             w => unreachable!("kernel width {w} outside 2..=16"),
         }
     };
@@ -123,7 +168,7 @@ fn next_smooth_even(m: usize) -> usize {
     loop {
         let mut r = c;
         for p in [2, 3, 5] {
-            while r % p == 0 {
+            while r.is_multiple_of(p) {
                 r /= p;
             }
         }
@@ -350,7 +395,36 @@ impl Nufft2d {
         self.fold(grid);
     }
 
+    /// Spreads with the widest vector unit the CPU has. The arithmetic is the same IEEE operations
+    /// in the same order on every path (no fused multiply-add), so the bits do not depend on the CPU.
     fn spread_w<const W: usize>(
+        &self,
+        points: &[[f64; 2]],
+        weight: &impl Fn(usize) -> f64,
+        grid: &mut [f64],
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2, checked just above.
+            unsafe { self.spread_w_avx2::<W>(points, weight, grid) };
+            return;
+        }
+        self.spread_w_body::<W>(points, weight, grid);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn spread_w_avx2<const W: usize>(
+        &self,
+        points: &[[f64; 2]],
+        weight: &impl Fn(usize) -> f64,
+        grid: &mut [f64],
+    ) {
+        self.spread_w_body::<W>(points, weight, grid);
+    }
+
+    #[inline(always)]
+    fn spread_w_body<const W: usize>(
         &self,
         points: &[[f64; 2]],
         weight: &impl Fn(usize) -> f64,

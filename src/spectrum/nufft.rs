@@ -216,7 +216,10 @@ impl Nufft2d {
     /// `[1e-14, 1e-1]`.
     ///
     /// Accuracy contract: for type 1, over every bin whose exact power `P = |F|²/N` is at least 1e-3
-    /// of the mean power, the relative error of `P` is at most `10 · eps`.
+    /// of the mean power, the relative error of `P` is at most `10 · eps`. Below eps ≈ 1e-13 the
+    /// double-precision rounding of the transform, amplified by the deconvolution, sets a floor:
+    /// measured 1.3e-12 to 1.7e-12 for eps = 1e-13 and 1e-14 (N = 4096, K = 256), so there the
+    /// contract does not hold; eps = 1e-12 still meets it (5.9e-12).
     pub fn new(res: usize, eps: f64) -> Result<Self> {
         check_res(res)?;
         if !(EPS_MIN..=EPS_MAX).contains(&eps) {
@@ -243,8 +246,10 @@ impl Nufft2d {
             inv: FftPlanner::new().plan_fft_inverse(n),
         };
         plan.corr = plan.deconvolution();
-        // A kernel-value error δ changes each point's contribution by about δ relative.
-        if let Some((_, coef)) = plan.fit_kernel(tol / 10.0) {
+        // A kernel-value error δ changes each point's contribution by about δ relative; below 1e-14
+        // the fit gains nothing against the rounding floor of the transform (≈ 2e-12 per bin of P,
+        // measured) and monomial Horner cannot reach it anyway.
+        if let Some((_, coef)) = plan.fit_kernel((tol / 10.0).max(1e-14)) {
             plan.coef = coef;
         }
         Ok(plan)

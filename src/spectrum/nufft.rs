@@ -6,6 +6,13 @@
 //! Type 2 (modes → points) is its adjoint: divide, inverse FFT, interpolate with the same kernel.
 //! Cost: `O(N w² + n² log n)` with `n ≈ 2K` and `w` kernel points per dimension.
 //!
+//! Implementation notes: the point weights of type 1 are real, so the fine grid is real and a
+//! real-to-complex FFT (realfft) along x does half the work; only the `K/2 + 1` kept columns get the
+//! complex FFT along y, and the negative `k1` half comes from Hermitian symmetry. The kernel is
+//! evaluated per point as `2w` values of fitted polynomials (Horner, degree chosen at planning time
+//! until the measured fit error is below the tolerance), then `w²` multiply-adds into a padded grid
+//! whose margins are folded back once per transform.
+//!
 //! Frequencies follow the grid convention of [`crate::spectrum`]: entry `i * K + j` holds
 //! `k1 = j − K/2` (first coordinate) and `k2 = i − K/2` (second coordinate). Coordinates are periods of
 //! the unit torus: any finite value is accepted and wrapped onto `[0, 1)`.

@@ -55,6 +55,26 @@ fn exact_power(points: &[[f64; 2]], res: usize) -> Vec<f64> {
 }
 
 #[test]
+fn plans_are_send_and_sync() {
+    fn shared<T: Send + Sync>() {}
+    shared::<Nufft2d>();
+}
+
+#[test]
+fn type1_meets_the_contract_on_a_larger_grid() {
+    // More points than bins, and a fine grid that is not a power of two (n = 2·96 = 192).
+    let pts = random_set(3000, 14);
+    let res = 96;
+    let reference = exact_power(&pts, res);
+    for eps in [1e-4, 1e-7] {
+        let plan = Nufft2d::new(res, eps).unwrap();
+        let err = max_rel_err(&plan.power(&pts), &reference);
+        eprintln!("random N=3000 K={res} eps={eps:e}: max rel err {err:.3e}");
+        assert!(err <= 10.0 * eps, "K={res} eps={eps:e}: {err:e}");
+    }
+}
+
+#[test]
 fn type1_meets_the_per_bin_contract() {
     let sets: Vec<(&str, Vec<[f64; 2]>)> = vec![
         ("random", random_set(600, 11)),

@@ -5,6 +5,7 @@
 //! npy, EXR, PNG and CSV.
 
 pub mod cli;
+pub mod converge;
 pub mod error;
 pub mod integrands;
 pub mod output;
@@ -14,5 +15,6 @@ pub mod render;
 pub mod rng;
 pub mod samplers;
 pub mod spectrum;
+pub mod variance;
 
 pub use error::{Error, Result};

@@ -1,11 +1,14 @@
 //! The command-line front end: one module per subcommand, each a clap `Args` struct and a `run`.
 
+pub mod converge;
 pub mod gallery;
+pub mod integrands;
 pub mod oracle;
 pub mod pixel_spectrum;
 pub mod render;
 pub mod sample;
 pub mod spectrum;
+pub mod variance;
 
 use crate::error::{Error, Result};
 use crate::points::shear::ShearMode;

@@ -2,6 +2,8 @@
 //! so a failed run leaves no half-written file.
 
 pub mod image;
+pub mod plot;
+pub mod sheet;
 
 use crate::error::{Error, Result};
 use std::io::{BufWriter, Write};

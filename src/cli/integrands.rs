@@ -1,0 +1,48 @@
+//! `anisospec integrands`: the integrand families, their keys, and (with `--check`) what a spec parses to.
+
+use crate::error::Result;
+use crate::integrands::{parse, spec::listing};
+
+/// List the integrand families and their keys, or check one integrand spec.
+#[derive(Debug, clap::Args)]
+pub struct IntegrandsArgs {
+    /// Parse this integrand (NAME:key=value,...) and print its dimension, exact integral, variance and
+    /// whether the Fourier prediction can use it, instead of the list.
+    #[arg(long, value_name = "SPEC")]
+    pub check: Option<String>,
+}
+
+/// Prints the list, or the checked integrand.
+pub fn run(args: &IntegrandsArgs) -> Result<()> {
+    let Some(spec) = &args.check else {
+        print!("{}", listing());
+        return Ok(());
+    };
+    let f = parse(spec)?;
+    let r = f.reference();
+    println!("integrand  {}", f.name());
+    println!("dims       {}", f.dims());
+    println!("integral   {:.17e} (± {:e})", r.value, r.stderr);
+    match f.mean_square() {
+        Some(m) => println!(
+            "variance   {:.10e} (of f over the domain)",
+            m - r.value * r.value
+        ),
+        None => println!("variance   unknown in closed form"),
+    }
+    match f.spectral_planes() {
+        Some(p) => {
+            let names: Vec<String> = p.iter().map(|p| p.name()).collect();
+            println!(
+                "spectrum   on the plane(s) {}; Fourier coefficients with error <= {:e}",
+                names.join(", "),
+                f.fourier_error()
+            );
+        }
+        None => println!(
+            "spectrum   spread over all {}D frequencies: use `anisospec converge`",
+            f.dims()
+        ),
+    }
+    Ok(())
+}

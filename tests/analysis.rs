@@ -1,0 +1,325 @@
+//! Issue 3 "Must show": convergence rates, prediction against measurement, directional cones, bad input.
+//!
+//! Statistics used to size the runs. With R realizations, the relative standard error of an MSE is
+//! about sqrt((κ − 1)/R) (κ the kurtosis of the error; 3 for Gaussian errors), i.e. σ(ln MSE) ≈ 0.07 at
+//! R = 400. A weighted fit over N = 16, 64, 256, 1024, 4096 (ln N spaced by ln 4, Σ(ln N − mean)² = 19.2)
+//! then has σ(slope) ≈ 0.07 / sqrt(19.2) ≈ 0.016: the ±0.15 tolerance is about 9σ, so noise cannot fail
+//! a right rate, while the rates being told apart differ by at least 0.5 (30σ). The fit's own standard
+//! error is asserted to stay below 0.05 so that the test keeps this power.
+
+use anisospec::converge::{converge, measure, ConvergeConfig};
+use anisospec::integrands::parse;
+use anisospec::samplers::{self, Sampler};
+use anisospec::spectrum::Method;
+use anisospec::variance::{predict, VarianceConfig};
+
+fn sampler(name: &str, dims: usize) -> Box<dyn Sampler> {
+    samplers::build(name, dims).unwrap()
+}
+
+const NS: [usize; 5] = [16, 64, 256, 1024, 4096];
+
+/// DESIGN §4 rates: (sampler, [aligned step, 30° step, disc, Gaussian]).
+///
+/// Discontinuous integrands: random −1; jittered −1.5; N-rooks −2 on the aligned edge (its x marginal
+/// is stratified in 1D) and −1 otherwise; MJ and CMJ −2 aligned and −1.5 otherwise. Smooth Gaussian:
+/// random −1, jittered and MJ −2, N-rooks −1 (white off the axes), CMJ about −3.
+const RATES: [(&str, [f64; 4]); 5] = [
+    ("random", [-1.0, -1.0, -1.0, -1.0]),
+    ("jittered", [-1.5, -1.5, -1.5, -2.0]),
+    ("nrooks", [-2.0, -1.0, -1.0, -1.0]),
+    ("mj", [-2.0, -1.5, -1.5, -2.0]),
+    ("cmj", [-2.0, -1.5, -1.5, -3.0]),
+];
+
+const RATE_INTEGRANDS: [&str; 4] = [
+    "step:theta=0,c=0.5",
+    "step:theta=30",
+    "disc:r=0.3",
+    "gaussian:sigma=0.15",
+];
+
+#[test]
+fn rates_of_design_section_4() {
+    let cfg = ConvergeConfig {
+        realizations: 400,
+        seed: 2017,
+        random_placement: false,
+    };
+    let mut failures = Vec::new();
+    for (name, want) in RATES {
+        let s = sampler(name, 2);
+        for (spec, &want) in RATE_INTEGRANDS.iter().zip(&want) {
+            let f = parse(spec).unwrap();
+            let c = converge(s.as_ref(), f.as_ref(), &NS, &cfg, |_| {}).unwrap();
+            let fit = c.fit.unwrap();
+            eprintln!(
+                "{name:>9} {spec:<20} slope {:+.3} ± {:.3} (want {want:+.1}; chi2/dof {:.2})",
+                fit.slope, fit.stderr, fit.chi2_per_dof
+            );
+            assert!(
+                fit.stderr < 0.05,
+                "{name} on {spec}: slope error {} too large for a fair test",
+                fit.stderr
+            );
+            if (fit.slope - want).abs() > 0.15 {
+                failures.push(format!(
+                    "{name} on {spec}: slope {:.3} ± {:.3}, want {want}",
+                    fit.slope, fit.stderr
+                ));
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "rates off by more than 0.15:\n{}",
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn prediction_meets_measurement() {
+    let mut worst: f64 = 0.0;
+    for spec in ["gaussian:sigma=0.15", "step:theta=0,c=0.5"] {
+        let f = parse(spec).unwrap();
+        for name in ["random", "jittered", "nrooks"] {
+            let s = sampler(name, 2);
+            for n in [64usize, 256] {
+                let vc = VarianceConfig {
+                    res: 32,
+                    res_per_n: Some(4),
+                    realizations: 1000,
+                    cones: 4,
+                    seed: 31,
+                    method: Method::Exact,
+                };
+                let p = &predict(s.as_ref(), f.as_ref(), &[n], &vc).unwrap().points[0];
+                let cfg = ConvergeConfig {
+                    realizations: 20000,
+                    seed: 32,
+                    random_placement: false,
+                };
+                let m = measure(s.as_ref(), f.as_ref(), n, &cfg).unwrap();
+                let z = (p.variance - m.mse) / (p.stderr.powi(2) + m.mse_stderr.powi(2)).sqrt();
+                eprintln!(
+                    "{name:>9} {spec:<20} N={n:<4} predicted {:.4e} ± {:.1e} (tail {:.1e})  measured {:.4e} ± {:.1e}  z = {z:+.2}",
+                    p.variance,
+                    p.stderr,
+                    p.tail.unwrap(),
+                    m.mse,
+                    m.mse_stderr
+                );
+                assert!(z.abs() <= 3.0, "{name} on {spec} at N={n}: z = {z}");
+                worst = worst.max(z.abs());
+            }
+        }
+    }
+    eprintln!("largest |z| = {worst:.2}");
+}
+
+#[test]
+fn prediction_meets_measurement_in_4d_on_two_planes() {
+    // Two sheared Gaussians in xu and yv: the prediction sums the xu and yv spectra of the 4D sets.
+    let f = parse("gaussian:sigma=0.12@xu+gaussian:sigma=0.12,cx=0.3@yv").unwrap();
+    let s = sampler("padded-jittered", 4);
+    let vc = VarianceConfig {
+        res: 32,
+        res_per_n: None,
+        realizations: 1000,
+        cones: 4,
+        seed: 41,
+        method: Method::Exact,
+    };
+    let p = &predict(s.as_ref(), f.as_ref(), &[64], &vc).unwrap().points[0];
+    let cfg = ConvergeConfig {
+        realizations: 20000,
+        seed: 42,
+        random_placement: false,
+    };
+    let m = measure(s.as_ref(), f.as_ref(), 64, &cfg).unwrap();
+    let z = (p.variance - m.mse) / (p.stderr.powi(2) + m.mse_stderr.powi(2)).sqrt();
+    eprintln!(
+        "padded-jittered 4D N=64: predicted {:.4e} ± {:.1e}, measured {:.4e} ± {:.1e}, z = {z:+.2}",
+        p.variance, p.stderr, m.mse, m.mse_stderr
+    );
+    assert!(z.abs() <= 3.0, "z = {z}");
+}
+
+#[test]
+fn nrooks_cones_aligned_versus_oblique_step() {
+    let s = sampler("nrooks", 2);
+    let ns = [16usize, 64, 256, 1024];
+    // Aligned step: f̂ lives on the k1 axis (cone 0 of 4). The variance comes from |k1| up to a few N,
+    // so the grid grows as 4N.
+    let aligned = parse("step:theta=0,c=0.5").unwrap();
+    let vc = VarianceConfig {
+        res: 32,
+        res_per_n: Some(4),
+        realizations: 100,
+        cones: 4,
+        seed: 5,
+        method: Method::Exact,
+    };
+    let pa = predict(s.as_ref(), aligned.as_ref(), &ns, &vc).unwrap();
+    for p in &pa.points {
+        let share = p.cones[0] / p.grid;
+        eprintln!(
+            "aligned N={:<5} variance {:.3e} (tail {:.1e}), axis cone share {share:.4}",
+            p.n,
+            p.variance,
+            p.tail.unwrap()
+        );
+        assert!(share > 0.99, "N={}: axis cone share {share}", p.n);
+    }
+    let fit = pa.cone_fits[0].unwrap();
+    let total = pa.fit.unwrap();
+    eprintln!(
+        "aligned: axis cone slope {:.3} ± {:.3}, total {:.3} ± {:.3}",
+        fit.slope, fit.stderr, total.slope, total.stderr
+    );
+    assert!((fit.slope + 2.0).abs() < 0.15 && (total.slope + 2.0).abs() < 0.15);
+
+    // 30° step: the edge's spectrum lies along 30°, in cone 1; the square's sides add axis terms
+    // that N-rooks suppresses. The diagonal cones (1 and 3) are white for N-rooks: slope −1.
+    let oblique = parse("step:theta=30").unwrap();
+    let vc = VarianceConfig {
+        res: 64,
+        res_per_n: None,
+        method: Method::nufft(1e-9).unwrap(),
+        ..vc
+    };
+    let po = predict(s.as_ref(), oblique.as_ref(), &ns, &vc).unwrap();
+    let off: Vec<f64> = po.points.iter().map(|p| p.cones[1] + p.cones[3]).collect();
+    for (p, o) in po.points.iter().zip(&off) {
+        let share = o / p.grid;
+        eprintln!(
+            "30° N={:<5} variance {:.3e}, diagonal cones share {share:.3}",
+            p.n, p.variance
+        );
+        if p.n >= 64 {
+            assert!(share > 0.85, "N={}: diagonal share {share}", p.n);
+        }
+    }
+    let se: Vec<f64> = po
+        .points
+        .iter()
+        .map(|p| (p.cone_stderr[1].powi(2) + p.cone_stderr[3].powi(2)).sqrt())
+        .collect();
+    let nf: Vec<f64> = ns.iter().map(|&n| n as f64).collect();
+    let fit = anisospec::converge::fit_power_law(&nf, &off, &se).unwrap();
+    eprintln!(
+        "30°: diagonal cones slope {:.3} ± {:.3}",
+        fit.slope, fit.stderr
+    );
+    assert!((fit.slope + 1.0).abs() < 0.15);
+}
+
+#[test]
+fn same_bits_for_a_seed_whatever_the_threads() {
+    let f = parse("disc:r=0.25,cx=0.4").unwrap();
+    let s = sampler("mj", 2);
+    let cfg = ConvergeConfig {
+        realizations: 64,
+        seed: 9,
+        random_placement: true,
+    };
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| converge(s.as_ref(), f.as_ref(), &[16, 64], &cfg, |_| {}).unwrap())
+    };
+    let (a, b) = (run(1), run(3));
+    for (p, q) in a.points.iter().zip(&b.points) {
+        assert_eq!(p.mse.to_bits(), q.mse.to_bits());
+        assert_eq!(p.mean_error.to_bits(), q.mean_error.to_bits());
+    }
+}
+
+#[test]
+fn random_placement_keeps_the_rate() {
+    // A disc moved at random in every realization: jittered still converges at −1.5.
+    let f = parse("disc:r=0.2").unwrap();
+    let cfg = ConvergeConfig {
+        realizations: 400,
+        seed: 77,
+        random_placement: true,
+    };
+    let c = converge(
+        sampler("jittered", 2).as_ref(),
+        f.as_ref(),
+        &NS,
+        &cfg,
+        |_| {},
+    )
+    .unwrap();
+    let fit = c.fit.unwrap();
+    eprintln!(
+        "jittered, disc placed at random: slope {:.3} ± {:.3}",
+        fit.slope, fit.stderr
+    );
+    assert!((fit.slope + 1.5).abs() < 0.15);
+    for p in &c.points {
+        // Unbiased: the mean error is within 4 standard errors of 0 (sd of e ≈ sqrt(MSE)).
+        assert!(p.mean_error.abs() < 4.0 * (p.mse / 400.0).sqrt(), "{p:?}");
+    }
+}
+
+#[test]
+fn bad_input_is_a_usage_error_with_exit_code_2() {
+    for (spec, says) in [
+        ("blob", "unknown integrand 'blob'"),
+        ("gaussian:sigma=-0.1", "sigma=-0.1"),
+        ("disc:r=0.3,cx=0.9", "outside the domain"),
+        ("fan:s0=0.8,s1=0.2", "s0=0.8 > s1=0.2"),
+        ("step:angle=3", "unknown key 'angle'"),
+    ] {
+        let e = parse(spec).err().unwrap_or_else(|| panic!("{spec} parsed"));
+        assert_eq!(e.exit_code(), 2, "{spec}");
+        assert!(e.to_string().contains(says), "{spec}: {e}");
+    }
+    let cfg = ConvergeConfig {
+        realizations: 10,
+        seed: 1,
+        random_placement: false,
+    };
+    let f2 = parse("disc").unwrap();
+    // A sampler whose N does not fit, a 4D sampler on a 2D integrand, too few realizations.
+    for (s, n, r) in [("jittered", 15usize, 10usize), ("random", 16, 1)] {
+        let e = converge(
+            sampler(s, 2).as_ref(),
+            f2.as_ref(),
+            &[n],
+            &ConvergeConfig {
+                realizations: r,
+                ..cfg
+            },
+            |_| {},
+        )
+        .unwrap_err();
+        assert_eq!(e.exit_code(), 2, "{e}");
+    }
+    let e = converge(
+        sampler("random", 4).as_ref(),
+        f2.as_ref(),
+        &[16],
+        &cfg,
+        |_| {},
+    )
+    .unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    // The Fourier prediction of a product over two projections is refused with a pointer to converge.
+    let prod = parse("gaussian@xy*gaussian@uv").unwrap();
+    let vc = VarianceConfig {
+        res: 16,
+        res_per_n: None,
+        realizations: 4,
+        cones: 4,
+        seed: 1,
+        method: Method::Exact,
+    };
+    let e = predict(sampler("random", 4).as_ref(), prod.as_ref(), &[16], &vc).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("converge"));
+}

@@ -272,7 +272,7 @@ fn bad_input_is_reported_with_exit_code_two() {
     assert!(e.to_string().contains("position"), "{e}");
     let typed = write("typed.toml", "width = \"big\"\n");
     let e = Scene::load(Some(&typed)).unwrap_err();
-    assert!(e.to_string().contains("width"), "{e}");
+    assert!(e.to_string().contains("width = \"big\""), "{e}");
     let e = Scene::load(Some(&dir.path().join("missing.toml"))).unwrap_err();
     assert_eq!(e.exit_code(), 2);
 

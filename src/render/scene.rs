@@ -112,10 +112,11 @@ impl SceneConfig {
             ))
         })?;
         let config: SceneConfig = toml::from_str(&text).map_err(|e| {
+            // toml's Display quotes the offending line (so the key) with a caret under the value.
             Error::Input(format!(
-                "scene file {}: {}; allowed keys are width, height, fov, position, focus, aperture",
+                "scene file {}: {}\nallowed keys: width, height, fov, position, focus, aperture",
                 path.display(),
-                e.message()
+                e.to_string().trim_end()
             ))
         })?;
         config

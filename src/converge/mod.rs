@@ -13,7 +13,6 @@ pub use fit::{fit_power_law, SlopeFit};
 
 use crate::error::{Error, Result};
 use crate::integrands::Integrand;
-use crate::points::toroidal_shift;
 use crate::rng;
 use crate::samplers::{validate_n, Sampler};
 use rand::Rng as _;
@@ -104,11 +103,10 @@ pub fn realization_error(
     cfg: &ConvergeConfig,
 ) -> f64 {
     let key = 3 * n as u64;
-    let mut set = sampler.generate(n, &mut rng::substream(cfg.seed, r as u64, key));
     let dims = sampler.dims();
     let mut shift_rng = rng::substream(cfg.seed, r as u64, key + 1);
     let shift: Vec<f64> = (0..dims).map(|_| shift_rng.random::<f64>()).collect();
-    toroidal_shift(&mut set, &shift);
+    let set = sampler.generate_shifted(n, &mut rng::substream(cfg.seed, r as u64, key), &shift);
     let placed = if cfg.random_placement {
         f.placed(&mut rng::substream(cfg.seed, r as u64, key + 2))
     } else {

@@ -141,4 +141,10 @@ impl Sampler for Sheared {
         shear_set_4d(&mut set, self.sx, self.sy, self.mode);
         set
     }
+    /// Shifts the unsheared pattern, then shears: the sheared set itself is not periodic.
+    fn generate_shifted(&self, n: usize, rng: &mut Rng, shift: &[f64]) -> Vec<f64> {
+        let mut set = self.inner.generate_shifted(n, rng, shift);
+        shear_set_4d(&mut set, self.sx, self.sy, self.mode);
+        set
+    }
 }

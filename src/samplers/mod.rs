@@ -32,6 +32,16 @@ pub trait Sampler: Send + Sync {
 
     /// One set of `n` points, `[n, dims]` row-major, in `[0,1)^dims`. `n` has passed [`Sampler::check_n`].
     fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64>;
+
+    /// One set moved by the Cranley–Patterson rotation `shift` (one entry per dimension, in `[0,1)`),
+    /// as an unbiased estimator needs. The default shifts the generated set mod 1. A sampler whose sets
+    /// are not periodic on the torus (the seam-free shear) shifts its underlying pattern instead, before
+    /// transforming it: shifting afterwards would wrap the transformed set and cut a seam through it.
+    fn generate_shifted(&self, n: usize, rng: &mut Rng, shift: &[f64]) -> Vec<f64> {
+        let mut set = self.generate(n, rng);
+        crate::points::toroidal_shift(&mut set, shift);
+        set
+    }
 }
 
 /// Checks `n` for `sampler`, with a message naming the nearest valid `n`.

@@ -320,6 +320,22 @@ mod tests {
     }
 
     #[test]
+    fn listing_names_every_family_and_key_and_each_parses() {
+        let text = listing();
+        for f in FAMILIES {
+            assert!(text.contains(f.name));
+            for (k, _) in f.keys {
+                assert!(text.contains(&format!("    {k} ")), "{k}");
+            }
+            // Defaults build, and the name an integrand reports parses back to the same integrand.
+            let g = parse(f.name).unwrap();
+            let h = parse(&g.name()).unwrap();
+            assert_eq!(g.name(), h.name());
+            assert_eq!(g.reference(), h.reference());
+        }
+    }
+
+    #[test]
     fn bad_specs_say_what_is_wrong() {
         let msg = |s: &str| {
             let e = parse(s).err().unwrap_or_else(|| panic!("{s} should fail"));

@@ -107,7 +107,9 @@ fn speed_vs_error(c: &mut Criterion) {
         });
     }
     g.finish();
-    let mut csv = String::from("eps,kernel_width,fine_grid,seconds_per_transform,max_rel_err_P,contract_10eps\n");
+    let mut csv = String::from(
+        "eps,kernel_width,fine_grid,seconds_per_transform,max_rel_err_P,contract_10eps\n",
+    );
     eprintln!("\n  eps     w   n   ms/transform  max rel err P  (≤ 10 eps?)");
     for (eps, w, nf, secs, err) in &rows {
         let ok = *err <= 10.0 * eps;

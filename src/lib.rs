@@ -11,6 +11,7 @@ pub mod integrands;
 pub mod output;
 pub mod points;
 pub mod progress;
+pub mod render;
 pub mod rng;
 pub mod samplers;
 pub mod spectrum;

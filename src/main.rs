@@ -20,8 +20,20 @@ enum Command {
     Sample(cli::sample::SampleArgs),
     /// Expected power spectrum of a sampler or a point file, in any 2D projection.
     Spectrum(cli::spectrum::SpectrumArgs),
-    /// The built-in default job: spectra of the classical samplers in xy and xu, written to OUT/gallery.
+    /// Spectra of the classical samplers in xy and xu, written to OUT/gallery.
     Gallery(cli::gallery::GalleryArgs),
+    /// List the integrands and their keys.
+    Integrands(cli::integrands::IntegrandsArgs),
+    /// Predict variance from spectra, Var(N) = (1/N) Σ |f̂(k)|² E[P_N(k)], split by directional cone.
+    Variance(cli::variance::VarianceArgs),
+    /// Measure the convergence of samplers on an integrand: MSE against N, slope, time.
+    Converge(cli::converge::ConvergeArgs),
+    /// Render the depth-of-field scene with a sampler, optionally sheared by the depth oracle.
+    Render(cli::render::RenderArgs),
+    /// Write the depth oracle per pixel: depth, shear, shear range and class.
+    Oracle(cli::oracle::OracleArgs),
+    /// The xu and yv slice spectra of one pixel's integrand.
+    PixelSpectrum(cli::pixel_spectrum::PixelSpectrumArgs),
 }
 
 fn main() -> ExitCode {
@@ -43,6 +55,12 @@ fn main() -> ExitCode {
         Command::Sample(a) => cli::sample::run(a),
         Command::Spectrum(a) => cli::spectrum::run(a),
         Command::Gallery(a) => cli::gallery::run(a),
+        Command::Integrands(a) => cli::integrands::run(a),
+        Command::Variance(a) => cli::variance::run(a),
+        Command::Converge(a) => cli::converge::run(a),
+        Command::Render(a) => cli::render::run(a),
+        Command::Oracle(a) => cli::oracle::run(a),
+        Command::PixelSpectrum(a) => cli::pixel_spectrum::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

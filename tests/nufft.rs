@@ -10,7 +10,9 @@ use rustfft::num_complex::Complex64;
 
 fn random_set(n: usize, seed: u64) -> Vec<[f64; 2]> {
     let mut rng = stream(seed, 0);
-    (0..n).map(|_| [rng.random::<f64>(), rng.random::<f64>()]).collect()
+    (0..n)
+        .map(|_| [rng.random::<f64>(), rng.random::<f64>()])
+        .collect()
 }
 
 fn jittered_set(m: usize, seed: u64) -> Vec<[f64; 2]> {
@@ -136,7 +138,9 @@ fn type2_is_the_adjoint_of_weighted_type1() {
 fn bad_parameters_are_rejected() {
     for eps in [0.0, 1e-15, 0.2, 1.0, -1e-3, f64::NAN, f64::INFINITY] {
         match Nufft2d::new(64, eps) {
-            Err(Error::Usage(msg)) => assert!(msg.contains("1e-14") && msg.contains("1e-1"), "{msg}"),
+            Err(Error::Usage(msg)) => {
+                assert!(msg.contains("1e-14") && msg.contains("1e-1"), "{msg}")
+            }
             Err(e) => panic!("eps {eps}: wrong error kind {e:?}"),
             Ok(_) => panic!("eps {eps} accepted"),
         }
@@ -157,10 +161,16 @@ fn check_edge(name: &str, pts: &[[f64; 2]], res: usize, eps: f64) {
     let p = plan.power(pts);
     let reference = exact_power(pts, res);
     let n = pts.len() as f64;
-    assert!(f.iter().all(|c| c.re.is_finite() && c.im.is_finite()), "{name}");
+    assert!(
+        f.iter().all(|c| c.re.is_finite() && c.im.is_finite()),
+        "{name}"
+    );
     for (a, e) in p.iter().zip(&reference) {
         assert!(a.is_finite(), "{name}");
-        assert!((a - e).abs() <= 10.0 * eps * e.max(1e-3 * n), "{name}: {a} vs {e}");
+        assert!(
+            (a - e).abs() <= 10.0 * eps * e.max(1e-3 * n),
+            "{name}: {a} vs {e}"
+        );
     }
     let exact_f = exact::fourier_sums(pts, res);
     assert!(rel_l2(&f, &exact_f) <= 10.0 * eps, "{name}");

@@ -3,6 +3,7 @@
 
 use super::ImageKind;
 use crate::error::Result;
+use crate::output::sheet::{write_sheet, Panel};
 use crate::output::write_atomic;
 use crate::points::Projection;
 use crate::samplers::{self, Sampler};
@@ -57,6 +58,7 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
     let method = Method::nufft(args.eps)?;
     let dir = args.out.join("gallery");
     let mut rows = Vec::new();
+    let mut spectra = Vec::new();
     let jobs = GALLERY_2D
         .iter()
         .map(|&s| (s, 2, Projection::XY))
@@ -86,6 +88,27 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
         )?;
         eprintln!("{stem}: N = {n}, {:.2} s", started.elapsed().as_secs_f64());
         rows.push((sampler.name(), dims, proj.name(), n, stem));
+        spectra.push(spec);
+    }
+    for (dims, file, title) in [
+        (2, "sheet_2d_xy.png", "2D samplers, xy"),
+        (4, "sheet_4d_xu.png", "4D samplers, xu"),
+    ] {
+        let panels: Vec<Panel> = rows
+            .iter()
+            .zip(&spectra)
+            .filter(|(row, _)| row.1 == dims)
+            .map(|(row, spec)| Panel {
+                label: format!("{} N={}", row.0, row.3),
+                values: &spec.mean,
+                res: spec.res,
+            })
+            .collect();
+        let title = format!(
+            "Expected power spectra: {title}, {} realizations",
+            args.realizations
+        );
+        write_sheet(&dir.join(file), &title, &panels, 5)?;
     }
     let index = dir.join("index.md");
     write_atomic(&index, |w| {

@@ -3,6 +3,9 @@
 pub mod converge;
 pub mod gallery;
 pub mod integrands;
+pub mod oracle;
+pub mod pixel_spectrum;
+pub mod render;
 pub mod sample;
 pub mod spectrum;
 pub mod variance;

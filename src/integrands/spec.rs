@@ -156,6 +156,10 @@ pub fn parse(spec: &str) -> Result<Box<dyn Integrand>> {
             "empty --integrand; write NAME:key=value,..., e.g. step:theta=30 (see `anisospec integrands`)".into(),
         ));
     }
+    if let Some(pixel) = spec.strip_prefix("pixel:") {
+        // The renderer's pixel integrand is 4D on its own: it takes no placement and no combination.
+        return crate::render::pixel::parse_pixel_spec(pixel);
+    }
     let mut terms: Vec<Box<dyn Integrand>> = Vec::new();
     for term in split_plus(spec) {
         let mut factors = term
@@ -278,6 +282,13 @@ pub fn listing() -> String {
             out.push_str(&format!("    {k:<7} {meaning}\n"));
         }
     }
+    out.push_str(
+        "pixel      a depth-of-field pixel of the built-in scene (4D: x, y in the pixel, u, v on the lens)\n\
+         \x20   px      column, from the left\n\
+         \x20   py      row, from the top\n\
+         \x20   scene   optional TOML scene file overriding camera, focus and aperture\n\
+         \x20   refcount rays of the cached reference\n",
+    );
     out.push_str(
         "\nWrite NAME:key=value,... (e.g. step:theta=30). Append @PROJ (two of x,y,u,v) to place a 2D\n\
          integrand on a projection of 4D; join with * (factors on disjoint dimensions) and + (sums),\n\

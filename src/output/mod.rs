@@ -3,6 +3,7 @@
 
 pub mod image;
 pub mod plot;
+pub mod sheet;
 
 use crate::error::{Error, Result};
 use std::io::{BufWriter, Write};

@@ -39,7 +39,8 @@ pub struct LogLogPlot {
 
 static FONT: Once = Once::new();
 
-fn register_font() {
+/// Registers the embedded DejaVu Sans as the "sans-serif" font (once per process).
+pub fn register_font() {
     FONT.call_once(|| {
         // The embedded font is valid; a failure here would only lose text, never the plot.
         let _ = plotters::style::register_font(

@@ -85,6 +85,20 @@ impl Poisson {
     }
 }
 
+impl Poisson {
+    /// What [`Sampler::generate`] does, also returning the relative radius finally kept: the
+    /// requested one, or a power of [`RADIUS_BACKOFF`] times it if the darts ran out. The minimum
+    /// toroidal distance of the set is at least that radius times [`max_packing_radius`]`(n)`.
+    pub fn generate_reporting(&self, n: usize, rng: &mut Rng) -> (Vec<f64>, f64) {
+        let mut rel = self.relative_radius;
+        let mut state = Darts::new(n);
+        while !state.throw(rel * max_packing_radius(n), n, rng) {
+            rel *= RADIUS_BACKOFF;
+        }
+        (state.points, rel)
+    }
+}
+
 impl Default for Poisson {
     fn default() -> Self {
         Self {
@@ -146,12 +160,7 @@ impl Sampler for Poisson {
         Ok(())
     }
     fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64> {
-        let mut r = self.radius(n);
-        let mut state = Darts::new(n);
-        while !state.throw(r, n, rng) {
-            r *= RADIUS_BACKOFF;
-        }
-        state.points
+        self.generate_reporting(n, rng).0
     }
 }
 

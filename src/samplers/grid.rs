@@ -7,13 +7,17 @@ use crate::rng::Rng;
 use rand::seq::SliceRandom;
 use rand::Rng as _;
 
-/// A uniform point in stratum `k` of `count` equal strata of `[0,1)`: `(k + ξ) / count`, nudged down
-/// if rounding pushed it into stratum `k + 1`, so that `floor(x * count) == k` holds in `f64`.
+/// A uniform point in stratum `k` of `count` equal strata of `[0,1)`: `(k + ξ) / count`, nudged by
+/// one ulp at a time if rounding moved it out of stratum `k`, so that `floor(x * count) == k` holds
+/// in `f64`.
 pub(crate) fn in_stratum(k: usize, count: usize, rng: &mut Rng) -> f64 {
     let c = count as f64;
     let mut x = (k as f64 + rng.random::<f64>()) / c;
     while x >= 1.0 || (x * c).floor() > k as f64 {
         x = x.next_down();
+    }
+    while (x * c).floor() < k as f64 {
+        x = x.next_up();
     }
     x
 }

@@ -6,8 +6,8 @@
 
 pub mod exact;
 pub mod expected;
-pub mod profiles;
 pub mod nufft;
+pub mod profiles;
 
 use crate::error::{Error, Result};
 use nufft::Nufft2d;

@@ -24,21 +24,66 @@ use std::sync::Arc;
 macro_rules! with_width {
     ($w:expr, $W:ident => $body:expr) => {
         match $w {
-            2 => { const $W: usize = 2; $body }
-            3 => { const $W: usize = 3; $body }
-            4 => { const $W: usize = 4; $body }
-            5 => { const $W: usize = 5; $body }
-            6 => { const $W: usize = 6; $body }
-            7 => { const $W: usize = 7; $body }
-            8 => { const $W: usize = 8; $body }
-            9 => { const $W: usize = 9; $body }
-            10 => { const $W: usize = 10; $body }
-            11 => { const $W: usize = 11; $body }
-            12 => { const $W: usize = 12; $body }
-            13 => { const $W: usize = 13; $body }
-            14 => { const $W: usize = 14; $body }
-            15 => { const $W: usize = 15; $body }
-            16 => { const $W: usize = 16; $body }
+            2 => {
+                const $W: usize = 2;
+                $body
+            }
+            3 => {
+                const $W: usize = 3;
+                $body
+            }
+            4 => {
+                const $W: usize = 4;
+                $body
+            }
+            5 => {
+                const $W: usize = 5;
+                $body
+            }
+            6 => {
+                const $W: usize = 6;
+                $body
+            }
+            7 => {
+                const $W: usize = 7;
+                $body
+            }
+            8 => {
+                const $W: usize = 8;
+                $body
+            }
+            9 => {
+                const $W: usize = 9;
+                $body
+            }
+            10 => {
+                const $W: usize = 10;
+                $body
+            }
+            11 => {
+                const $W: usize = 11;
+                $body
+            }
+            12 => {
+                const $W: usize = 12;
+                $body
+            }
+            13 => {
+                const $W: usize = 13;
+                $body
+            }
+            14 => {
+                const $W: usize = 14;
+                $body
+            }
+            15 => {
+                const $W: usize = 15;
+                $body
+            }
+            16 => {
+                const $W: usize = 16;
+                $body
+            }
             w => unreachable!("kernel width {w} outside 2..=16"),
         }
     };

@@ -1,0 +1,71 @@
+//! `anisospec pixel-spectrum`: a pixel integrand's `xu` (or any) slice spectrum, by sampling the
+//! integrand on a fine grid and an FFT (see [`crate::render::spectrum`]).
+
+use crate::error::{Error, Result};
+use crate::points::Projection;
+use crate::render::spectrum::{slice_spectrum, spectrum_png_pixels};
+use crate::render::{PixelIntegrand, Scene};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// Writes |f^(k1, k2)|^2 of one pixel's integrand for a projection, as npy, EXR and PNG.
+#[derive(clap::Args, Debug)]
+pub struct PixelSpectrumArgs {
+    /// TOML scene file overriding the built-in camera; without it the built-in Cornell box is used.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// The pixel as COLUMN,ROW (row 0 at the top), e.g. --pixel 20,20.
+    #[arg(long)]
+    pub pixel: String,
+    /// Projection: two of x,y,u,v, e.g. xu or yv (default xu). The other two coordinates are averaged
+    /// (see --average), which gives the k_other = 0 slice of the 4D spectrum.
+    #[arg(long, default_value = "xu")]
+    pub proj: String,
+    /// Frequency grid size K (even): the integrand is sampled on a K x K grid of cell centres and
+    /// k1, k2 run over -K/2..K/2-1.
+    #[arg(long, default_value_t = 128)]
+    pub res: usize,
+    /// The other two coordinates are averaged with an M x M midpoint grid; 1 fixes them to 1/2.
+    #[arg(long, default_value_t = 8)]
+    pub average: usize,
+    /// Output path; FILE.npy (float64 [K, K], P[i, j] at k1 = j - K/2, k2 = i - K/2), FILE.exr (raw
+    /// values, largest k2 on top) and FILE.png (log10 of P over its largest non-DC value, from -6 to 0)
+    /// are written, whatever the extension given.
+    #[arg(short = 'o', long = "output")]
+    pub output: PathBuf,
+}
+
+/// Parses `COLUMN,ROW`.
+fn parse_pixel(text: &str) -> Result<(usize, usize)> {
+    let bad = || {
+        Error::Usage(format!(
+            "--pixel '{text}' is not COLUMN,ROW; give two non-negative integers, e.g. --pixel 20,20"
+        ))
+    };
+    let (a, b) = text.split_once(',').ok_or_else(bad)?;
+    Ok((
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    ))
+}
+
+/// Runs `anisospec pixel-spectrum`.
+pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
+    let (px, py) = parse_pixel(&args.pixel)?;
+    let proj = Projection::parse(&args.proj, 4)?;
+    let scene = Arc::new(Scene::load(args.scene.as_deref())?);
+    let f = PixelIntegrand::new(scene, px, py)?;
+    let p = slice_spectrum(|x| f.value(x), proj, args.res, args.average)?;
+    let k = args.res;
+    crate::output::write_npy(&args.output.with_extension("npy"), &[k, k], &p)?;
+    crate::output::image::write_spectrum_exr(&args.output.with_extension("exr"), &p, k)?;
+    let png = args.output.with_extension("png");
+    let (side, pixels) = spectrum_png_pixels(&p, k);
+    crate::output::image::write_png(&png, side, side, 1, &pixels)?;
+    println!(
+        "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {} (.npy, .exr)",
+        proj.name(),
+        png.display()
+    );
+    Ok(())
+}

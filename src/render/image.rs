@@ -1,0 +1,256 @@
+//! Rendering the whole image with any 4D sampler, optionally sheared per pixel by the oracle, the
+//! high-count reference image, and the MSE between them.
+//!
+//! Pixel `i = py × width + px` draws its set from `rng::stream(seed, i)` and its toroidal shift from
+//! `rng::substream(seed, i, 1)`: the image is the same for a seed whatever the thread count. The shift
+//! is applied to the pattern before the shear; both maps preserve the uniform measure, so every
+//! estimate is unbiased.
+
+use super::oracle::{PixelClass, PixelOracle};
+use super::pixel::{check_ref_count, fnv1a, stratified_reference, RENDER_VERSION};
+use super::scene::Scene;
+use crate::error::{Error, Result};
+use crate::points::shear::{shear_set_4d, ShearMode};
+use crate::points::toroidal_shift;
+use crate::rng;
+use crate::samplers::{validate_n, Sampler};
+use indicatif::ProgressBar;
+use rand::Rng as _;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Default rays per pixel of the reference image: `2^16`.
+pub const DEFAULT_IMAGE_REF_COUNT: usize = 1 << 16;
+
+/// The `n` points (`[n, 4]` row-major) of realization `index` of `seed`: a set of `sampler` from
+/// `stream(seed, index)`, shifted by a uniform toroidal shift from `substream(seed, index, 1)`, then,
+/// if `shear` is `Some((sx, sy, mode))`, sheared by `sx` in `xu` and `sy` in `yv`.
+pub fn pixel_points(
+    sampler: &dyn Sampler,
+    n: usize,
+    seed: u64,
+    index: u64,
+    shear: Option<(f64, f64, ShearMode)>,
+) -> Vec<f64> {
+    let mut set = sampler.generate(n, &mut rng::stream(seed, index));
+    let mut r = rng::substream(seed, index, 1);
+    let shift: [f64; 4] = std::array::from_fn(|_| r.random::<f64>());
+    toroidal_shift(&mut set, &shift);
+    if let Some((sx, sy, mode)) = shear {
+        shear_set_4d(&mut set, sx, sy, mode);
+    }
+    set
+}
+
+/// The estimate `(1/n) Σ f_p(x_j)` of pixel `(px, py)` over the points of [`pixel_points`].
+pub fn estimate_pixel(scene: &Scene, px: usize, py: usize, points: &[f64]) -> f64 {
+    let cam = scene.camera();
+    let n = points.len() / 4;
+    let sum: f64 = points
+        .chunks_exact(4)
+        .map(|p| {
+            let (o, d) = cam.ray(px, py, [p[0], p[1], p[2], p[3]]);
+            scene.radiance(o, d)
+        })
+        .sum();
+    sum / n as f64
+}
+
+/// What a pixel the oracle classes as a double wedge (several depths) is sheared by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum WedgeShear {
+    /// The shear of the depth seen through the pixel and lens centres, like every other pixel.
+    Centre,
+    /// No shear: a single shear cannot fit a fan of them, and it undoes the pattern's own `x`
+    /// stratification, which an in-focus occluder edge needs (measured in tests/render.rs).
+    #[default]
+    None,
+}
+
+/// The per-pixel shears `(sx, sy)` the oracle gives: a hairline pixel's shear, 0 in focus, and for a
+/// double wedge as `wedge` says.
+pub fn oracle_shears(oracle: &[PixelOracle], wedge: WedgeShear) -> Vec<(f64, f64)> {
+    oracle
+        .iter()
+        .map(|o| match (o.class, wedge) {
+            (PixelClass::InFocus, _) | (PixelClass::DoubleWedge, WedgeShear::None) => (0.0, 0.0),
+            _ => (o.sx, o.sy),
+        })
+        .collect()
+}
+
+/// Renders every pixel with `spp` points of `sampler` (4D), seeded by `seed`. With `shear`, the points
+/// of pixel `i` are sheared by `shears[i] = (sx, sy)` in the given mode (one entry per pixel,
+/// row-major; see [`oracle_shears`]). Returns the image row-major from the top row.
+pub fn render_image(
+    scene: &Scene,
+    sampler: &dyn Sampler,
+    spp: usize,
+    seed: u64,
+    shear: Option<(&[(f64, f64)], ShearMode)>,
+    progress: &ProgressBar,
+) -> Result<Vec<f64>> {
+    if sampler.dims() != 4 {
+        return Err(Error::Usage(format!(
+            "the renderer needs a 4D sampler (x, y, u, v), but {} makes {}D points; use a 4D sampler such as padded-mj",
+            sampler.name(),
+            sampler.dims()
+        )));
+    }
+    validate_n(sampler, spp)?;
+    let (w, h) = (scene.width(), scene.height());
+    if let Some((o, _)) = shear {
+        if o.len() != w * h {
+            return Err(Error::Input(format!(
+                "{} shears were given but the image has {w}x{h} pixels",
+                o.len()
+            )));
+        }
+    }
+    let rows: Vec<Vec<f64>> = (0..h)
+        .into_par_iter()
+        .map(|py| {
+            let row = (0..w)
+                .map(|px| {
+                    let i = py * w + px;
+                    let s = shear.map(|(o, mode)| (o[i].0, o[i].1, mode));
+                    let pts = pixel_points(sampler, spp, seed, i as u64, s);
+                    estimate_pixel(scene, px, py, &pts)
+                })
+                .collect();
+            progress.inc(1);
+            row
+        })
+        .collect();
+    progress.finish_and_clear();
+    Ok(rows.concat())
+}
+
+/// A reference image: per pixel the mean of a [`stratified_reference`] and its standard error.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReferenceImage {
+    /// Pixel values, row-major from the top row.
+    pub value: Vec<f64>,
+    /// Standard error of each value.
+    pub stderr: Vec<f64>,
+    /// Rays per pixel.
+    pub count: usize,
+}
+
+impl ReferenceImage {
+    /// The mean squared standard error: the part of a measured MSE that is the reference's own noise.
+    pub fn noise_floor(&self) -> f64 {
+        self.stderr.iter().map(|s| s * s).sum::<f64>() / self.stderr.len() as f64
+    }
+}
+
+/// The cache file of a scene's reference image at `count` rays per pixel.
+pub fn reference_cache_file(scene: &Scene, count: usize, dir: &Path) -> PathBuf {
+    let key = format!("v{RENDER_VERSION} {} count={count}", scene.config().key());
+    dir.join(format!("image-{:016x}.npy", fnv1a(&key)))
+}
+
+/// The reference image at `count` rays per pixel (power of two, see [`check_ref_count`]): read from the
+/// cache folder if there, else computed (and cached if `cache_dir` is given).
+pub fn reference_image(
+    scene: &Scene,
+    count: usize,
+    cache_dir: Option<&Path>,
+    progress: &ProgressBar,
+) -> Result<ReferenceImage> {
+    check_ref_count(count)?;
+    let (w, h) = (scene.width(), scene.height());
+    let file = cache_dir.map(|d| reference_cache_file(scene, count, d));
+    if let Some(img) = file
+        .as_deref()
+        .and_then(|f| read_reference(f, w * h, count))
+    {
+        progress.finish_and_clear();
+        return Ok(img);
+    }
+    let cam = scene.camera();
+    let rows: Vec<Vec<(f64, f64)>> = (0..h)
+        .into_par_iter()
+        .map(|py| {
+            let row = (0..w)
+                .map(|px| {
+                    let r = stratified_reference(
+                        |p| {
+                            let (o, d) = cam.ray(px, py, p);
+                            scene.radiance(o, d)
+                        },
+                        count,
+                        (py * w + px) as u32,
+                    );
+                    (r.value, r.stderr)
+                })
+                .collect();
+            progress.inc(1);
+            row
+        })
+        .collect();
+    progress.finish_and_clear();
+    let pairs = rows.concat();
+    let img = ReferenceImage {
+        value: pairs.iter().map(|p| p.0).collect(),
+        stderr: pairs.iter().map(|p| p.1).collect(),
+        count,
+    };
+    if let Some(f) = file {
+        let data: Vec<f64> = pairs.iter().flat_map(|&(v, s)| [v, s]).collect();
+        crate::output::write_npy(&f, &[h, w, 2], &data)?;
+    }
+    Ok(img)
+}
+
+fn read_reference(file: &Path, pixels: usize, count: usize) -> Option<ReferenceImage> {
+    let bytes = std::fs::read(file).ok()?;
+    let npy = npyz::NpyFile::new(&bytes[..]).ok()?;
+    let data = npy.into_vec::<f64>().ok()?;
+    if data.len() != 2 * pixels || data.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    Some(ReferenceImage {
+        value: data.iter().step_by(2).copied().collect(),
+        stderr: data.iter().skip(1).step_by(2).copied().collect(),
+        count,
+    })
+}
+
+/// Mean over pixels of `(image − reference)²`.
+pub fn mse(image: &[f64], reference: &[f64]) -> f64 {
+    let sum: f64 = image
+        .iter()
+        .zip(reference)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum();
+    sum / image.len() as f64
+}
+
+/// Radiance mapped to white in the PNG preview (gamma 2.2 below it, clipped above).
+pub const PNG_WHITE: f64 = 0.5;
+
+/// Writes an image as EXR (one float channel per entry of `channels`, e.g. `Y`) at `path` with its
+/// extension replaced by `exr`, and a PNG preview of the first channel beside it (`png`). Returns the
+/// two paths.
+pub fn write_image_pair(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: &[(&str, &[f64])],
+) -> Result<(PathBuf, PathBuf)> {
+    let exr_path = path.with_extension("exr");
+    let png_path = path.with_extension("png");
+    let chans: Vec<(&str, Vec<f32>)> = channels
+        .iter()
+        .map(|(n, v)| (*n, v.iter().map(|&x| x as f32).collect()))
+        .collect();
+    crate::output::image::write_exr(&exr_path, width, height, &chans)?;
+    let pixels: Vec<u8> = channels[0]
+        .1
+        .iter()
+        .map(|&v| ((v / PNG_WHITE).clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0).round() as u8)
+        .collect();
+    crate::output::image::write_png(&png_path, width, height, 1, &pixels)?;
+    Ok((exr_path, png_path))
+}

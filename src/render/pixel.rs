@@ -1,0 +1,264 @@
+//! One pixel of the scene as a 4D integrand `f_p(x, y, u, v)` (DESIGN §5), with a cached
+//! high-count reference.
+//!
+//! The pixel value is `∫ f_p` over `[0,1)^4`: a box filter over the pixel footprint and a uniform
+//! weight over the square lens. The reference is the mean of `R` independent Owen-scrambled Sobol
+//! estimates ([`stratified_reference`]); its standard error is their standard deviation over `√R`.
+//! References are cached as small JSON files, keyed by the scene configuration, the pixel and the count.
+
+use super::scene::Scene;
+use crate::error::{Error, Result};
+use crate::integrands::{Integrand, Reference};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
+
+/// Version of the renderer's geometry and shading, part of every cache key: bump it when the scene
+/// changes so stale references are not reused.
+pub const RENDER_VERSION: u32 = 1;
+
+/// Default number of rays of a single pixel's reference: `2^20`, in 32 scrambled Sobol sets of `2^15`.
+pub const DEFAULT_PIXEL_REF_COUNT: usize = 1 << 20;
+
+/// Independent scrambles a reference is split into (its standard error comes from their spread).
+const REF_REPLICATES_MIN: usize = 32;
+
+/// Largest Sobol set sobol_burley supports.
+const SOBOL_MAX: usize = 1 << 16;
+
+/// The folder references are cached in: `$ANISOSPEC_CACHE` if set, else `out/cache`.
+pub fn default_cache_dir() -> PathBuf {
+    std::env::var_os("ANISOSPEC_CACHE").map_or_else(|| PathBuf::from("out/cache"), PathBuf::from)
+}
+
+/// Checks a reference count: a power of two from `2^10` to `2^24`.
+pub fn check_ref_count(count: usize) -> Result<()> {
+    if !count.is_power_of_two() || !(1 << 10..=1 << 24).contains(&count) {
+        let nearest = count
+            .clamp(1 << 10, 1 << 24)
+            .next_power_of_two()
+            .min(1 << 24);
+        return Err(Error::Usage(format!(
+            "a reference count of {count} is not allowed; it must be a power of two from 1024 to 16777216 \
+             (scrambled Sobol sets), e.g. {nearest}"
+        )));
+    }
+    Ok(())
+}
+
+/// The integral of `f` over `[0,1)^4` from `count` points (a power of two, see [`check_ref_count`]):
+/// `R = max(32, count / 2^16)` independent Owen-scrambled Sobol sets of `count / R` points, scrambled by
+/// `seed`. Returns their mean and its standard error. Deterministic for any thread count.
+pub fn stratified_reference<F>(f: F, count: usize, seed: u32) -> Reference
+where
+    F: Fn([f64; 4]) -> f64 + Sync,
+{
+    let replicates = (count / SOBOL_MAX).max(REF_REPLICATES_MIN);
+    let per = (count / replicates).max(1);
+    let estimates: Vec<f64> = (0..replicates)
+        .into_par_iter()
+        .map(|r| {
+            let scramble = seed.wrapping_mul(0x9E37_79B9).wrapping_add(r as u32);
+            let sum: f64 = (0..per)
+                .map(|i| {
+                    let p = sobol_burley::sample_4d(i as u32, 0, scramble);
+                    f(p.map(f64::from))
+                })
+                .sum();
+            sum / per as f64
+        })
+        .collect();
+    let r = replicates as f64;
+    let mean = estimates.iter().sum::<f64>() / r;
+    let var = estimates.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (r - 1.0);
+    Reference {
+        value: mean,
+        stderr: (var / r).sqrt(),
+    }
+}
+
+/// FNV-1a, 64 bits: a stable hash for cache file names (std's hasher is not stable across releases).
+pub(crate) fn fnv1a(text: &str) -> u64 {
+    text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// The integrand of pixel `(px, py)` of a scene: `f(x, y, u, v)` is the radiance along the thin-lens
+/// ray through pixel point `(x, y)` and lens point `(u, v)` (see [`super::camera`]).
+pub struct PixelIntegrand {
+    scene: Arc<Scene>,
+    px: usize,
+    py: usize,
+    ref_count: usize,
+    cache_dir: Option<PathBuf>,
+    label: String,
+    reference: OnceLock<Reference>,
+}
+
+impl PixelIntegrand {
+    /// Pixel `(px, py)` (column, row from the top) of `scene`; a pixel outside the image is
+    /// [`Error::Usage`] naming the image size. The reference uses [`DEFAULT_PIXEL_REF_COUNT`] rays and
+    /// is cached in [`default_cache_dir`].
+    pub fn new(scene: Arc<Scene>, px: usize, py: usize) -> Result<Self> {
+        let (w, h) = (scene.width(), scene.height());
+        if px >= w || py >= h {
+            return Err(Error::Usage(format!(
+                "pixel ({px}, {py}) is outside the {w}x{h} image; use 0 <= px < {w} and 0 <= py < {h}"
+            )));
+        }
+        Ok(Self {
+            scene,
+            px,
+            py,
+            ref_count: DEFAULT_PIXEL_REF_COUNT,
+            cache_dir: Some(default_cache_dir()),
+            label: format!("pixel:px={px},py={py}"),
+            reference: OnceLock::new(),
+        })
+    }
+
+    /// Uses `count` rays for the reference (see [`check_ref_count`]).
+    pub fn with_ref_count(mut self, count: usize) -> Result<Self> {
+        check_ref_count(count)?;
+        self.ref_count = count;
+        self.reference = OnceLock::new();
+        Ok(self)
+    }
+
+    /// Caches the reference in `dir`, or nowhere (`None`: computed on every run).
+    pub fn with_cache_dir(mut self, dir: Option<PathBuf>) -> Self {
+        self.cache_dir = dir;
+        self
+    }
+
+    /// Sets the name reported by [`Integrand::name`].
+    pub fn with_label(mut self, label: String) -> Self {
+        self.label = label;
+        self
+    }
+
+    /// The pixel `(px, py)`.
+    pub fn pixel(&self) -> (usize, usize) {
+        (self.px, self.py)
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// `f(x, y, u, v)`: radiance of the ray through pixel point `(x, y)` and lens point `(u, v)`.
+    pub fn value(&self, p: [f64; 4]) -> f64 {
+        let (o, d) = self.scene.camera().ray(self.px, self.py, p);
+        self.scene.radiance(o, d)
+    }
+
+    fn cache_key(&self) -> String {
+        format!(
+            "v{RENDER_VERSION} {} px={} py={} count={}",
+            self.scene.config().key(),
+            self.px,
+            self.py,
+            self.ref_count
+        )
+    }
+
+    fn cache_file(&self, dir: &Path, key: &str) -> PathBuf {
+        dir.join(format!("pixel-{:016x}.json", fnv1a(key)))
+    }
+
+    fn compute_reference(&self) -> Reference {
+        let key = self.cache_key();
+        if let Some(dir) = &self.cache_dir {
+            let file = self.cache_file(dir, &key);
+            if let Some(r) = read_cached(&file, &key) {
+                return r;
+            }
+            let r = stratified_reference(|p| self.value(p), self.ref_count, 1);
+            let json = serde_json::json!({"key": key, "value": r.value, "stderr": r.stderr});
+            let written = crate::output::write_atomic(&file, |w| {
+                use std::io::Write;
+                write!(w, "{json}")
+            });
+            if let Err(e) = written {
+                eprintln!("warning: the reference was computed but not cached: {e}");
+            }
+            return r;
+        }
+        stratified_reference(|p| self.value(p), self.ref_count, 1)
+    }
+}
+
+/// A cached reference if the file exists and holds the same key.
+fn read_cached(file: &Path, key: &str) -> Option<Reference> {
+    let text = std::fs::read_to_string(file).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    if v.get("key")?.as_str()? != key {
+        return None;
+    }
+    let value = v.get("value")?.as_f64()?;
+    let stderr = v.get("stderr")?.as_f64()?;
+    (value.is_finite() && stderr.is_finite()).then_some(Reference { value, stderr })
+}
+
+impl Integrand for PixelIntegrand {
+    fn name(&self) -> String {
+        self.label.clone()
+    }
+
+    fn dims(&self) -> usize {
+        4
+    }
+
+    fn eval(&self, x: &[f64]) -> f64 {
+        self.value([x[0], x[1], x[2], x[3]])
+    }
+
+    /// Computed on first use at the reference count (or read from the cache), then kept.
+    fn reference(&self) -> Reference {
+        *self.reference.get_or_init(|| self.compute_reference())
+    }
+}
+
+/// Parses the parameters of a `pixel:` integrand, `px=…,py=…[,scene=FILE][,refcount=N]` (the
+/// `pixel:` prefix may be included): the pixel's column and row, an optional TOML scene file, and the
+/// reference count (default [`DEFAULT_PIXEL_REF_COUNT`]). References are cached in
+/// [`default_cache_dir`].
+pub fn parse_pixel_spec(params: &str) -> Result<Box<dyn Integrand>> {
+    let body = params.strip_prefix("pixel:").unwrap_or(params);
+    let (mut px, mut py, mut scene, mut count) = (None, None, None, DEFAULT_PIXEL_REF_COUNT);
+    let usage = |m: String| {
+        Error::Usage(format!(
+            "{m} in 'pixel:{body}'; write pixel:px=COLUMN,py=ROW[,scene=FILE][,refcount=N]"
+        ))
+    };
+    for part in body.split(',').filter(|p| !p.trim().is_empty()) {
+        let (k, v) = part
+            .split_once('=')
+            .ok_or_else(|| usage(format!("'{part}' is not key=value")))?;
+        let int = |v: &str| {
+            v.trim()
+                .parse::<usize>()
+                .map_err(|_| usage(format!("{k}={v} is not a non-negative integer")))
+        };
+        match k.trim() {
+            "px" => px = Some(int(v)?),
+            "py" => py = Some(int(v)?),
+            "refcount" => count = int(v)?,
+            "scene" => scene = Some(PathBuf::from(v.trim())),
+            other => return Err(usage(format!("unknown parameter '{other}'"))),
+        }
+    }
+    let (px, py) = match (px, py) {
+        (Some(a), Some(b)) => (a, b),
+        _ => return Err(usage("both px and py are needed".into())),
+    };
+    let scene = Arc::new(Scene::load(scene.as_deref())?);
+    let label = format!("pixel:{}", body.trim());
+    Ok(Box::new(
+        PixelIntegrand::new(scene, px, py)?
+            .with_ref_count(count)?
+            .with_label(label),
+    ))
+}

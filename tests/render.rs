@@ -1,0 +1,476 @@
+//! Issue 4: the depth-of-field renderer integrand, its oracle, and what shearing buys on real pixels.
+//!
+//! Convergence is measured here with a small self-contained loop: for each N, `R` independent
+//! realizations (each its own stream and toroidal shift) of one pixel's estimate, their squared error
+//! against the pixel's cached reference, and a weighted least-squares slope of log MSE against log N
+//! whose standard error comes from the spread of the squared errors.
+//!
+//! Run with `--nocapture` to see the measured tables.
+
+use anisospec::integrands::Integrand;
+use anisospec::points::shear::ShearMode;
+use anisospec::render::image::{estimate_pixel, pixel_points};
+use anisospec::render::oracle::{oracle_image, oracle_pixel, PixelClass};
+use anisospec::render::{PixelIntegrand, Scene, SceneConfig};
+use anisospec::rng::Rng;
+use anisospec::samplers::Sampler;
+use rand::seq::SliceRandom;
+use rand::Rng as _;
+use rayon::prelude::*;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// The out-of-focus back-wall pixel (single depth 6, shear −0.711).
+const WALL: (usize, usize) = (20, 20);
+/// An occluder pixel: the in-focus middle box's left edge in front of the out-of-focus back wall.
+const EDGE: (usize, usize) = (33, 30);
+/// An occluder pixel: the out-of-focus near box's right side in front of the out-of-focus back wall.
+const EDGE2: (usize, usize) = (26, 45);
+
+fn cache_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render-cache")
+}
+
+fn scene() -> Arc<Scene> {
+    Arc::new(Scene::load(None).unwrap())
+}
+
+fn pixel(p: (usize, usize)) -> PixelIntegrand {
+    PixelIntegrand::new(scene(), p.0, p.1)
+        .unwrap()
+        .with_cache_dir(Some(cache_dir()))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Test samplers (self-contained: the registry's 4D samplers are not needed to measure the pixel).
+
+/// Uniform random 4D points.
+struct Random4;
+
+impl Sampler for Random4 {
+    fn name(&self) -> String {
+        "random".into()
+    }
+    fn dims(&self) -> usize {
+        4
+    }
+    fn check_n(&self, _n: usize) -> Result<(), usize> {
+        Ok(())
+    }
+    fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64> {
+        (0..4 * n).map(|_| rng.random::<f64>()).collect()
+    }
+}
+
+/// Uncorrelated multi-jittered 2D points (Chiu, Shirley & Wang 1994, in Kensler's shuffled form),
+/// `n = m²`.
+fn mj2(m: usize, rng: &mut Rng) -> Vec<[f64; 2]> {
+    let mf = m as f64;
+    let mut p = vec![[0.0; 2]; m * m];
+    for j in 0..m {
+        for i in 0..m {
+            p[j * m + i] = [
+                (i as f64 + (j as f64 + rng.random::<f64>()) / mf) / mf,
+                (j as f64 + (i as f64 + rng.random::<f64>()) / mf) / mf,
+            ];
+        }
+    }
+    for j in 0..m {
+        for i in 0..m {
+            let k = rng.random_range(j..m);
+            let t = p[j * m + i][0];
+            p[j * m + i][0] = p[k * m + i][0];
+            p[k * m + i][0] = t;
+        }
+    }
+    for i in 0..m {
+        for j in 0..m {
+            let k = rng.random_range(i..m);
+            let t = p[j * m + i][1];
+            p[j * m + i][1] = p[j * m + k][1];
+            p[j * m + k][1] = t;
+        }
+    }
+    p
+}
+
+/// Padded multi-jittered 4D (Cook 1986): MJ in `xy` and in `uv`, joined by a random permutation.
+/// Its `xu` projection is only N-rooks.
+struct PaddedMj;
+
+impl Sampler for PaddedMj {
+    fn name(&self) -> String {
+        "padded-mj".into()
+    }
+    fn dims(&self) -> usize {
+        4
+    }
+    fn check_n(&self, n: usize) -> Result<(), usize> {
+        let m = (n as f64).sqrt().round() as usize;
+        if m * m == n {
+            Ok(())
+        } else {
+            Err((m * m).max(1))
+        }
+    }
+    fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64> {
+        let m = (n as f64).sqrt().round() as usize;
+        let xy = mj2(m, rng);
+        let mut uv = mj2(m, rng);
+        uv.shuffle(rng);
+        xy.iter()
+            .zip(&uv)
+            .flat_map(|(a, b)| [a[0], a[1], b[0], b[1]])
+            .collect()
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Convergence loop.
+
+/// MSE of `realizations` estimates of `f` at `n` points, its standard error, and the bias estimate
+/// (mean error) with its standard error.
+struct Point {
+    n: usize,
+    mse: f64,
+    mse_se: f64,
+    bias: f64,
+    bias_se: f64,
+}
+
+fn measure(
+    f: &PixelIntegrand,
+    sampler: &dyn Sampler,
+    n: usize,
+    realizations: usize,
+    seed: u64,
+    shear: Option<(f64, f64, ShearMode)>,
+) -> Point {
+    let reference = f.reference();
+    let (px, py) = f.pixel();
+    let errors: Vec<f64> = (0..realizations)
+        .into_par_iter()
+        .map(|r| {
+            let pts = pixel_points(sampler, n, seed, r as u64, shear);
+            estimate_pixel(f.scene(), px, py, &pts) - reference.value
+        })
+        .collect();
+    let r = realizations as f64;
+    let mse = errors.iter().map(|e| e * e).sum::<f64>() / r;
+    let var_sq = errors.iter().map(|e| (e * e - mse).powi(2)).sum::<f64>() / (r - 1.0);
+    let bias = errors.iter().sum::<f64>() / r;
+    let var = errors.iter().map(|e| (e - bias).powi(2)).sum::<f64>() / (r - 1.0);
+    Point {
+        n,
+        mse,
+        mse_se: (var_sq / r).sqrt(),
+        bias,
+        bias_se: (var / r).sqrt(),
+    }
+}
+
+/// Weighted least-squares slope of `log MSE` against `log N` and its standard error
+/// (`se(log MSE) = se(MSE) / MSE`).
+fn slope(points: &[Point]) -> (f64, f64) {
+    let w: Vec<f64> = points
+        .iter()
+        .map(|p| (p.mse / p.mse_se).powi(2))
+        .collect();
+    let x: Vec<f64> = points.iter().map(|p| (p.n as f64).ln()).collect();
+    let y: Vec<f64> = points.iter().map(|p| p.mse.ln()).collect();
+    let sw: f64 = w.iter().sum();
+    let xm = w.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>() / sw;
+    let ym = w.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>() / sw;
+    let sxx: f64 = w.iter().zip(&x).map(|(a, b)| a * (b - xm).powi(2)).sum();
+    let sxy: f64 = (0..x.len()).map(|i| w[i] * (x[i] - xm) * (y[i] - ym)).sum();
+    (sxy / sxx, (1.0 / sxx).sqrt())
+}
+
+fn curve(
+    label: &str,
+    f: &PixelIntegrand,
+    sampler: &dyn Sampler,
+    ns: &[usize],
+    realizations: usize,
+    shear: Option<(f64, f64, ShearMode)>,
+) -> (Vec<Point>, f64, f64) {
+    let pts: Vec<Point> = ns
+        .iter()
+        .map(|&n| measure(f, sampler, n, realizations, 7, shear))
+        .collect();
+    let (s, se) = slope(&pts);
+    let row: Vec<String> = pts
+        .iter()
+        .map(|p| format!("N={}: {:.3e}±{:.1e}", p.n, p.mse, p.mse_se))
+        .collect();
+    println!("{label:<28} slope {s:.3} ± {se:.3} | {}", row.join("  "));
+    (pts, s, se)
+}
+
+// ---------------------------------------------------------------------------------------------
+
+/// The oracle's shear is the camera's: the ray through `(x, y, u, v)` and the ray through
+/// `(x − s δ, y − s δ', u + δ, v + δ')` meet the back wall at the same point, to rounding.
+#[test]
+fn shear_formula_matches_the_camera() {
+    let sc = scene();
+    let o = oracle_pixel(&sc, WALL.0, WALL.1);
+    assert_eq!(o.class, PixelClass::Hairline);
+    assert!((o.depth - 6.0).abs() < 1e-9);
+    let s = o.sx;
+    let cam = sc.camera();
+    let hit = |p: [f64; 4]| {
+        let (org, d) = cam.ray(WALL.0, WALL.1, p);
+        sc.intersect(org, d).unwrap().point
+    };
+    for &(x, y, u, v, du, dv) in &[(0.2, 0.3, 0.1, 0.4, 0.5, 0.3), (0.9, 0.6, 0.7, 0.2, -0.4, 0.6)] {
+        let a = hit([x, y, u, v]);
+        let b = hit([x - s * du, y - s * dv, u + du, v + dv]);
+        assert!((a - b).length() < 1e-9, "{a} vs {b}");
+        // And the shear is not zero: moving the lens alone moves the hit point.
+        let c = hit([x, y, u + du, v + dv]);
+        assert!((a - c).length() > 1e-3);
+    }
+}
+
+/// Random sampling is unbiased on a single-depth and an occluder pixel, and its MSE falls as N^-1.
+#[test]
+fn random_sampling_is_unbiased_with_slope_minus_one() {
+    for p in [WALL, EDGE] {
+        let f = pixel(p);
+        let r = f.reference();
+        println!("pixel {p:?}: reference {:.6} ± {:.1e}", r.value, r.stderr);
+        let (pts, s, se) = curve(
+            &format!("random {p:?}"),
+            &f,
+            &Random4,
+            &[16, 64, 256, 1024],
+            400,
+            None,
+        );
+        for q in &pts {
+            let tol = 4.0 * (q.bias_se.powi(2) + r.stderr.powi(2)).sqrt();
+            assert!(
+                q.bias.abs() < tol,
+                "N={}: mean error {} exceeds 4 standard errors {}",
+                q.n,
+                q.bias,
+                tol
+            );
+        }
+        assert!((s + 1.0).abs() < 3.0 * se, "slope {s} ± {se} is not -1");
+    }
+}
+
+/// The back-wall pixel: padded MJ stays near N^-1; sheared by the oracle with the seam-free transport
+/// it converges faster and has a lower MSE from N = 256 on. The wrap-around shear is measured too.
+#[test]
+fn back_wall_pixel_sheared_beats_padded_mj() {
+    let f = pixel(WALL);
+    let s = oracle_pixel(f.scene(), WALL.0, WALL.1).sx;
+    let ns = [16, 64, 256, 1024, 4096];
+    let r = 256;
+    let (plain, s0, se0) = curve("padded-mj", &f, &PaddedMj, &ns, r, None);
+    let (tr, s1, se1) = curve(
+        "padded-mj sheared (transport)",
+        &f,
+        &PaddedMj,
+        &ns,
+        r,
+        Some((s, s, ShearMode::Transported)),
+    );
+    let (wr, s2, se2) = curve(
+        "padded-mj sheared (wrap)",
+        &f,
+        &PaddedMj,
+        &ns,
+        r,
+        Some((s, s, ShearMode::Wrap)),
+    );
+    let _ = curve("random", &f, &Random4, &ns, r, None);
+    assert!((s0 + 1.0).abs() < 0.25, "padded MJ slope {s0} ± {se0} is not near -1");
+    assert!(
+        s1 < s0 - 3.0 * (se0 * se0 + se1 * se1).sqrt(),
+        "sheared slope {s1} ± {se1} is not better than unsheared {s0} ± {se0}"
+    );
+    for i in 2..ns.len() {
+        let (a, b) = (&plain[i], &tr[i]);
+        assert!(
+            b.mse + 3.0 * b.mse_se < a.mse - 3.0 * a.mse_se,
+            "N={}: sheared MSE {} is not below unsheared {}",
+            a.n,
+            b.mse,
+            a.mse
+        );
+        let w = &wr[i];
+        println!(
+            "N={}: MSE ratio unsheared/transported {:.1}, wrap/transported {:.1}",
+            a.n,
+            a.mse / b.mse,
+            w.mse / b.mse
+        );
+    }
+    println!("slopes: unsheared {s0:.3}±{se0:.3}, transported {s1:.3}±{se1:.3}, wrap {s2:.3}±{se2:.3}");
+}
+
+/// A bad scene file is an input error (exit code 2) that names the key; a pixel outside the image is
+/// a usage error naming the image size; a zero aperture where a shear is needed is a usage error.
+#[test]
+fn bad_input_is_reported_with_exit_code_two() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let unknown = write("unknown.toml", "focus = 2.0\nfocal_length = 3.0\n");
+    let e = Scene::load(Some(&unknown)).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("focal_length"), "{e}");
+    let range = write("range.toml", "aperture = -0.5\n");
+    let e = Scene::load(Some(&range)).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("aperture"), "{e}");
+    let typed = write("typed.toml", "width = \"big\"\n");
+    let e = Scene::load(Some(&typed)).unwrap_err();
+    assert!(e.to_string().contains("width"), "{e}");
+    let e = Scene::load(Some(&dir.path().join("missing.toml"))).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+
+    let e = anisospec::render::parse_pixel_spec("px=64,py=3").err().unwrap();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("64x64"), "{e}");
+    assert!(anisospec::render::parse_pixel_spec("px=3").is_err());
+    assert!(anisospec::render::parse_pixel_spec("px=3,py=4,colour=red").is_err());
+
+    let pinhole = write("pinhole.toml", "aperture = 0.0\n");
+    let sc = Scene::load(Some(&pinhole)).unwrap();
+    let e = oracle_image(&sc).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("aperture"), "{e}");
+    let args = anisospec::cli::oracle::OracleArgs {
+        scene: Some(pinhole),
+        output: dir.path().join("oracle.exr"),
+    };
+    assert_eq!(anisospec::cli::oracle::run(&args).unwrap_err().exit_code(), 2);
+    assert!(!dir.path().join("oracle.exr").exists());
+}
+
+/// A scene file overrides camera, focus and aperture, and the oracle follows: focusing on the back
+/// wall puts the back-wall pixel in focus.
+#[test]
+fn scene_file_overrides_focus() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/focus_back_wall.toml");
+    let config = SceneConfig::from_file(&path).unwrap();
+    assert_eq!(config.focus, 6.0);
+    let sc = Scene::new(config).unwrap();
+    assert_eq!(oracle_pixel(&sc, WALL.0, WALL.1).class, PixelClass::InFocus);
+    assert_eq!(oracle_pixel(&scene(), WALL.0, WALL.1).class, PixelClass::Hairline);
+}
+
+/// Angular density of spectral energy (`Σ P` per radian of direction) over `|k| ≥ r0`, off both
+/// axes, inside the fan of slopes `k2/k1 ∈ (lo + m, hi − m)` and outside `(lo − m, hi + m)`.
+fn fan_densities(p: &[f64], res: usize, r0: f64, lo: f64, hi: f64, m: f64) -> (f64, f64) {
+    let h = res as i64 / 2;
+    let (mut inside, mut outside) = (0.0, 0.0);
+    for i in 0..res {
+        for j in 0..res {
+            let (k1, k2) = (j as i64 - h, i as i64 - h);
+            let r = ((k1 * k1 + k2 * k2) as f64).sqrt();
+            if k1 != 0 && k2 != 0 && r >= r0 {
+                let t = k2 as f64 / k1 as f64;
+                if t > lo + m && t < hi - m {
+                    inside += p[i * res + j];
+                } else if t < lo - m || t > hi + m {
+                    outside += p[i * res + j];
+                }
+            }
+        }
+    }
+    let width_in = (hi - m).atan() - (lo + m).atan();
+    let width_out = std::f64::consts::PI - ((hi + m).atan() - (lo - m).atan());
+    (inside / width_in, outside / width_out)
+}
+
+/// Occluder pixels: their `xu` spectra are double wedges. Between the shears of the two depths the
+/// spectrum holds far more energy than in the mirrored wedge, while the single-depth back-wall pixel
+/// shows no such fan. Writes the PNGs (and npy) to the test's temp folder. Then measures classical
+/// against sheared sampling there.
+#[test]
+fn occluder_pixels_have_double_wedge_spectra() {
+    use anisospec::render::spectrum::{slice_spectrum, spectrum_png_pixels};
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render-spectra");
+    let res = 128;
+    let mut ratios = Vec::new();
+    for (name, at) in [("edge", EDGE), ("edge2", EDGE2), ("wall", WALL)] {
+        let f = pixel(at);
+        let o = oracle_pixel(f.scene(), at.0, at.1);
+        let (lo, hi) = if name == "wall" {
+            // The back wall has one shear; test it against the first occluder's fan.
+            let e = oracle_pixel(f.scene(), EDGE.0, EDGE.1);
+            (e.s_min, e.s_max)
+        } else {
+            assert_eq!(o.class, PixelClass::DoubleWedge);
+            (o.s_min, o.s_max)
+        };
+        let p = slice_spectrum(|x| f.value(x), anisospec::points::Projection::XU, res, 8).unwrap();
+        anisospec::output::write_npy(&out.join(format!("{name}_xu.npy")), &[res, res], &p).unwrap();
+        let (side, png) = spectrum_png_pixels(&p, res);
+        anisospec::output::image::write_png(&out.join(format!("{name}_xu.png")), side, side, 1, &png)
+            .unwrap();
+        // The spectrum of g(x + s u) lies on k2 = s k1: a fan of shears [lo, hi] fills the wedge
+        // of slopes k2/k1 in [lo, hi]. Compare the energy per radian inside it (away from its edge
+        // lines) with outside it, beyond |k| = 8 and off the axes.
+        let (inside, outside) = fan_densities(&p, res, 8.0, lo, hi, 0.1);
+        let ratio = inside / outside;
+        println!(
+            "{name} {at:?}: shear fan [{lo:.3}, {hi:.3}] (oracle {:.3}); xu energy per radian inside \
+             the fan {inside:.3e}, outside {outside:.3e}, ratio {ratio:.1}",
+            o.sx
+        );
+        ratios.push(ratio);
+    }
+    // A double wedge holds more than twice the energy per radian inside its fan than outside; the
+    // single-depth wall, measured over the first occluder's fan, does not, and both occluders exceed
+    // it by more than twice.
+    for (name, r) in [("edge", ratios[0]), ("edge2", ratios[1])] {
+        assert!(r > 2.0 && r > 2.0 * ratios[2], "{name}: fan ratio {r}, wall {}", ratios[2]);
+    }
+    println!("spectra written to {}", out.display());
+
+    let ns = [64, 256, 1024, 4096];
+    let r = 256;
+    for at in [EDGE, EDGE2] {
+        let f = pixel(at);
+        let o = oracle_pixel(f.scene(), at.0, at.1);
+        let (plain, _, _) = curve(&format!("{at:?} padded-mj"), &f, &PaddedMj, &ns, r, None);
+        let _ = curve(&format!("{at:?} random"), &f, &Random4, &ns, r, None);
+        let (centre, _, _) = curve(
+            &format!("{at:?} sheared oracle (tr.)"),
+            &f,
+            &PaddedMj,
+            &ns,
+            r,
+            Some((o.sx, o.sy, ShearMode::Transported)),
+        );
+        let mid = 0.5 * (o.s_min + o.s_max);
+        let _ = curve(
+            &format!("{at:?} sheared fan mid (tr.)"),
+            &f,
+            &PaddedMj,
+            &ns,
+            r,
+            Some((mid, mid, ShearMode::Transported)),
+        );
+        // Sheared estimates stay unbiased on a fan.
+        for q in &centre {
+            let tol = 4.0 * (q.bias_se.powi(2) + f.reference().stderr.powi(2)).sqrt();
+            assert!(q.bias.abs() < tol, "N={}: sheared bias {} > {tol}", q.n, q.bias);
+        }
+        let last = ns.len() - 1;
+        println!(
+            "{at:?} N=4096: MSE sheared oracle / unsheared = {:.2}",
+            centre[last].mse / plain[last].mse
+        );
+    }
+}

@@ -435,3 +435,72 @@ fn commands_write_csv_and_plot_and_refuse_bad_input() {
     assert_eq!(e.exit_code(), 2);
     assert!(!bad.exists());
 }
+
+#[test]
+fn binary_lists_integrands_and_exits_2_on_bad_input() {
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_anisospec");
+    let out = Command::new(bin).arg("integrands").output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for name in [
+        "gaussian", "disc", "step", "sheared", "fan", "sigma", "theta", "s0",
+    ] {
+        assert!(
+            text.contains(name),
+            "{name} missing from `anisospec integrands`"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("conv.csv");
+    for (spec, says) in [
+        ("blob", "unknown integrand"),
+        ("gaussian:sigma=-0.1", "sigma"),
+        ("disc:r=0.3,cx=0.9", "outside the domain"),
+        ("fan:s0=0.7,s1=0.3", "s0=0.7 > s1=0.3"),
+    ] {
+        for cmd in ["converge", "variance"] {
+            let out = Command::new(bin)
+                .args([
+                    cmd,
+                    "--sampler",
+                    "jittered",
+                    "--integrand",
+                    spec,
+                    "--n",
+                    "16,64",
+                    "-o",
+                ])
+                .arg(&csv)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{cmd} {spec}: {err}");
+            assert!(err.contains(says), "{cmd} {spec}: {err}");
+            assert!(!csv.exists());
+        }
+    }
+    // A good run writes the CSV.
+    let out = Command::new(bin)
+        .args([
+            "converge",
+            "--sampler",
+            "random,mj",
+            "--integrand",
+            "step:theta=30",
+            "--n",
+            "16,64",
+            "--realizations",
+            "20",
+            "-o",
+        ])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 5);
+}

@@ -139,10 +139,16 @@ pub const FAMILIES: &[Family] = &[
 
 /// The family called `name`.
 pub fn family(name: &str) -> Result<&'static Family> {
+    if name == "pixel" {
+        return Err(Error::Usage(
+            "pixel needs its position and stands alone: write pixel:px=COLUMN,py=ROW (no @proj, + or *)"
+                .into(),
+        ));
+    }
     FAMILIES.iter().find(|f| f.name == name).ok_or_else(|| {
         let names: Vec<&str> = FAMILIES.iter().map(|f| f.name).collect();
         Error::Usage(format!(
-            "unknown integrand '{name}'; the integrands are {} (run `anisospec integrands` for their keys)",
+            "unknown integrand '{name}'; the integrands are {}, and pixel (run `anisospec integrands` for their keys)",
             names.join(", ")
         ))
     })
@@ -363,5 +369,7 @@ mod tests {
         assert!(msg("gaussian*disc").contains("share a dimension"));
         assert!(msg("gaussian+disc@uv").contains("mixes"));
         assert!(msg("").contains("empty"));
+        assert!(msg("pixel").contains("pixel:px="));
+        assert!(msg("pixel@xu").contains("pixel:px="));
     }
 }

@@ -33,8 +33,9 @@ impl Params {
 
 /// One integrand family: its name, what it is, its keys, and how to build it from parameters.
 ///
-/// To add a family (e.g. the renderer's `pixel:px=..,py=..`, a 4D integrand of its own), add one entry
-/// to [`FAMILIES`]: the parser, the error messages and `anisospec integrands` all follow from the table.
+/// To add an analytic family, add one entry to [`FAMILIES`]: the parser, the error messages and
+/// `anisospec integrands` all follow from the table. (The renderer's `pixel:px=..,py=..[,scene=FILE]`
+/// takes a file path, not only numbers, so [`parse`] hands it to `render::pixel::parse_pixel_spec`.)
 pub struct Family {
     /// Name as written on the command line.
     pub name: &'static str,
@@ -84,8 +85,8 @@ fn build_fan(p: &Params) -> Result<Box<dyn Integrand>> {
 
 /// Every integrand family the parser knows.
 ///
-/// Hook for the renderer: its depth-of-field pixel integrand joins as one more entry here, e.g.
-/// `Family { name: "pixel", keys: &[("px", ..), ("py", ..)], build: |p| render::pixel::from_params(p), .. }`.
+/// Every analytic integrand family the parser knows (the renderer's `pixel:` is parsed apart, see
+/// [`Family`]).
 pub const FAMILIES: &[Family] = &[
     Family {
         name: "gaussian",

@@ -37,9 +37,9 @@ pub struct RenderArgs {
     /// (x' = x - s u mod 1).
     #[arg(long, default_value = "transported", value_parser = crate::cli::parse_shear_mode)]
     pub shear_mode: ShearMode,
-    /// Shear of double-wedge (occluder) pixels: none (default; measured better) or centre (the shear of
-    /// the depth at the pixel and lens centres).
-    #[arg(long, value_enum, default_value_t = WedgeShear::None)]
+    /// Shear of double-wedge (occluder) pixels: centre (default: the shear of the depth at the pixel
+    /// and lens centres, measured better on the whole image) or none.
+    #[arg(long, value_enum, default_value_t = WedgeShear::Centre)]
     pub wedge_shear: WedgeShear,
     /// Write the high-count reference image (channels Y and stderr) instead of a sampled one.
     #[arg(long)]

@@ -42,7 +42,7 @@ pub struct SpectrumArgs {
     /// Use the exact O(N K²) DFT instead of the NUFFT.
     #[arg(long, conflicts_with = "eps")]
     pub exact: bool,
-    /// NUFFT tolerance (relative error of P), from 1e-14 to 1e-1.
+    /// NUFFT tolerance (relative error of P), from 1e-12 to 1e-1.
     #[arg(long, default_value_t = 1e-6)]
     pub eps: f64,
     /// Random seed of the realizations (with --sampler).

@@ -112,10 +112,11 @@ impl SceneConfig {
             ))
         })?;
         let config: SceneConfig = toml::from_str(&text).map_err(|e| {
+            // toml's Display quotes the offending line (so the key) with a caret under the value.
             Error::Input(format!(
-                "scene file {}: {}; allowed keys are width, height, fov, position, focus, aperture",
+                "scene file {}: {}\nallowed keys: width, height, fov, position, focus, aperture",
                 path.display(),
-                e.message()
+                e.to_string().trim_end()
             ))
         })?;
         config
@@ -150,17 +151,22 @@ impl SceneConfig {
                 self.aperture
             ));
         }
-        let p = DVec3::from_array(self.position);
-        let inside_room = p.cmpgt(ROOM_MIN).all() && p.cmplt(ROOM_MAX).all();
-        if !inside_room
-            || BOXES
-                .iter()
-                .any(|b| p.cmpge(b.min).all() && p.cmple(b.max).all())
-        {
+        let free = |p: DVec3| {
+            p.cmpgt(ROOM_MIN).all()
+                && p.cmplt(ROOM_MAX).all()
+                && !BOXES
+                    .iter()
+                    .any(|b| p.cmpge(b.min).all() && p.cmple(b.max).all())
+        };
+        let centre = DVec3::from_array(self.position);
+        let h = self.aperture / 2.0;
+        let corners =
+            [(-h, -h), (-h, h), (h, -h), (h, h)].map(|(x, y)| centre + DVec3::new(x, y, 0.0));
+        if !free(centre) || !corners.into_iter().all(free) {
             return Err(format!(
-                "position = {:?} is not free space; the camera must be inside the room \
-                 (-1 < x < 1, -1 < y < 1, -1 < z < 6) and outside the three boxes",
-                self.position
+                "position = {:?} with aperture = {} puts the lens outside free space; the whole lens \
+                 must be inside the room (-1 < x < 1, -1 < y < 1, -1 < z < 6) and outside the three boxes",
+                self.position, self.aperture
             ));
         }
         Ok(())

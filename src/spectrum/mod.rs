@@ -21,13 +21,13 @@ pub enum Method {
     Exact,
     /// The type-1 non-uniform FFT with relative tolerance `eps`.
     Nufft {
-        /// Requested tolerance, in `[1e-14, 1e-1]`.
+        /// Requested tolerance, in `[1e-12, 1e-1]`.
         eps: f64,
     },
 }
 
 impl Method {
-    /// The NUFFT method with tolerance `eps`, checked: `Error::Usage` unless `eps ∈ [1e-14, 1e-1]`.
+    /// The NUFFT method with tolerance `eps`, checked: `Error::Usage` unless `eps ∈ [1e-12, 1e-1]`.
     pub fn nufft(eps: f64) -> Result<Self> {
         // Planning validates eps (and a small even grid costs next to nothing).
         Nufft2d::new(2, eps)?;

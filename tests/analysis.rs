@@ -323,3 +323,184 @@ fn bad_input_is_a_usage_error_with_exit_code_2() {
     assert_eq!(e.exit_code(), 2);
     assert!(e.to_string().contains("converge"));
 }
+
+#[test]
+fn fan_prediction_meets_measurement() {
+    // The fan's Fourier coefficients come from quadrature (error < 1e-11); its double-wedge spectrum
+    // spreads over the whole grid, so this also runs the full-grid (NUFFT) path.
+    let f = parse("fan:s0=0.3,s1=0.7").unwrap();
+    for name in ["random", "jittered"] {
+        let s = sampler(name, 2);
+        let vc = VarianceConfig {
+            res: 64,
+            res_per_n: None,
+            realizations: 1000,
+            cones: 4,
+            seed: 51,
+            method: Method::nufft(1e-9).unwrap(),
+        };
+        let p = &predict(s.as_ref(), f.as_ref(), &[64], &vc).unwrap().points[0];
+        let cfg = ConvergeConfig {
+            realizations: 20000,
+            seed: 52,
+            random_placement: false,
+        };
+        let m = measure(s.as_ref(), f.as_ref(), 64, &cfg).unwrap();
+        let z = (p.variance - m.mse) / (p.stderr.powi(2) + m.mse_stderr.powi(2)).sqrt();
+        eprintln!(
+            "{name:>9} fan N=64: predicted {:.4e} ± {:.1e} (tail {:.1e}), measured {:.4e} ± {:.1e}, z = {z:+.2}",
+            p.variance,
+            p.stderr,
+            p.tail.unwrap(),
+            m.mse,
+            m.mse_stderr
+        );
+        assert!(z.abs() <= 3.0, "{name}: z = {z}");
+    }
+}
+
+#[test]
+fn commands_write_csv_and_plot_and_refuse_bad_input() {
+    use anisospec::cli::converge::{run as converge_run, ConvergeArgs};
+    use anisospec::cli::variance::{run as variance_run, VarianceArgs};
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, png) = (dir.path().join("conv.csv"), dir.path().join("conv.png"));
+    let args = ConvergeArgs {
+        sampler: vec!["random".into(), "jittered".into()],
+        integrand: "disc:r=0.3".into(),
+        n: vec![16, 64, 256],
+        realizations: 50,
+        seed: 1,
+        random_placement: false,
+        output: Some(csv.clone()),
+        plot: Some(png.clone()),
+    };
+    converge_run(&args).unwrap();
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<&str> = text.lines().collect();
+    assert_eq!(rows.len(), 1 + 2 * 3);
+    assert!(rows[0].starts_with("sampler,integrand,n,mse,mse_stderr"));
+    for r in &rows[1..] {
+        let cells: Vec<&str> = r.split(',').collect();
+        // The integrand name holds commas and is quoted: count from the end.
+        let mse: f64 = cells[cells.len() - 8].parse().unwrap();
+        let slope: f64 = cells[cells.len() - 3].parse().unwrap();
+        assert!(mse > 0.0 && slope < 0.0, "{r}");
+    }
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+
+    let vcsv = dir.path().join("var.csv");
+    let vargs = VarianceArgs {
+        sampler: "nrooks".into(),
+        integrand: "step:theta=30".into(),
+        n: vec![16, 64],
+        res: 32,
+        res_per_n: None,
+        realizations: 10,
+        cones: 4,
+        exact: false,
+        eps: 1e-9,
+        seed: 1,
+        output: Some(vcsv.clone()),
+    };
+    variance_run(&vargs).unwrap();
+    let text = std::fs::read_to_string(&vcsv).unwrap();
+    assert!(text.starts_with("n,variance,stderr,grid,tail,cone_0,cone_0_stderr"));
+    assert_eq!(text.lines().count(), 3);
+
+    // Bad input: exit code 2 and no output written.
+    let bad = dir.path().join("bad.csv");
+    for spec in [
+        "blob",
+        "gaussian:sigma=-1",
+        "disc:r=0.4,cy=0.95",
+        "fan:s0=1,s1=0",
+    ] {
+        let e = converge_run(&ConvergeArgs {
+            integrand: spec.into(),
+            output: Some(bad.clone()),
+            plot: None,
+            ..args.clone()
+        })
+        .unwrap_err();
+        assert_eq!(e.exit_code(), 2, "{spec}: {e}");
+    }
+    let e = converge_run(&ConvergeArgs {
+        sampler: vec!["random".into(), "nosuch".into()],
+        output: Some(bad.clone()),
+        plot: None,
+        ..args.clone()
+    })
+    .unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(!bad.exists());
+}
+
+#[test]
+fn binary_lists_integrands_and_exits_2_on_bad_input() {
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_anisospec");
+    let out = Command::new(bin).arg("integrands").output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for name in [
+        "gaussian", "disc", "step", "sheared", "fan", "sigma", "theta", "s0",
+    ] {
+        assert!(
+            text.contains(name),
+            "{name} missing from `anisospec integrands`"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("conv.csv");
+    for (spec, says) in [
+        ("blob", "unknown integrand"),
+        ("gaussian:sigma=-0.1", "sigma"),
+        ("disc:r=0.3,cx=0.9", "outside the domain"),
+        ("fan:s0=0.7,s1=0.3", "s0=0.7 > s1=0.3"),
+    ] {
+        for cmd in ["converge", "variance"] {
+            let out = Command::new(bin)
+                .args([
+                    cmd,
+                    "--sampler",
+                    "jittered",
+                    "--integrand",
+                    spec,
+                    "--n",
+                    "16,64",
+                    "-o",
+                ])
+                .arg(&csv)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{cmd} {spec}: {err}");
+            assert!(err.contains(says), "{cmd} {spec}: {err}");
+            assert!(!csv.exists());
+        }
+    }
+    // A good run writes the CSV.
+    let out = Command::new(bin)
+        .args([
+            "converge",
+            "--sampler",
+            "random,mj",
+            "--integrand",
+            "step:theta=30",
+            "--n",
+            "16,64",
+            "--realizations",
+            "20",
+            "-o",
+        ])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 5);
+}

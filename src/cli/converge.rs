@@ -7,7 +7,7 @@ use crate::samplers;
 use std::path::PathBuf;
 
 /// Measure MSE(N) over independent, randomly shifted realizations, and fit the convergence slope.
-#[derive(Debug, clap::Args)]
+#[derive(Clone, Debug, clap::Args)]
 pub struct ConvergeArgs {
     /// Samplers, comma-separated (see `anisospec samplers`), e.g. random,jittered,nrooks.
     #[arg(long, value_delimiter = ',', required = true)]

@@ -9,7 +9,7 @@ use crate::variance::{predict, write_csv, VarianceConfig};
 use std::path::PathBuf;
 
 /// Predict Var(N) = (1/N) Σ_k |f̂(k)|² E[P_N(k)] for a sampler on an integrand, split by direction.
-#[derive(Debug, clap::Args)]
+#[derive(Clone, Debug, clap::Args)]
 pub struct VarianceArgs {
     /// Sampler (see `anisospec samplers`); its dimension is the integrand's.
     #[arg(long)]

@@ -33,8 +33,9 @@ impl Params {
 
 /// One integrand family: its name, what it is, its keys, and how to build it from parameters.
 ///
-/// To add a family (e.g. the renderer's `pixel:px=..,py=..`, a 4D integrand of its own), add one entry
-/// to [`FAMILIES`]: the parser, the error messages and `anisospec integrands` all follow from the table.
+/// To add an analytic family, add one entry to [`FAMILIES`]: the parser, the error messages and
+/// `anisospec integrands` all follow from the table. (The renderer's `pixel:px=..,py=..[,scene=FILE]`
+/// takes a file path, not only numbers, so [`parse`] hands it to `render::pixel::parse_pixel_spec`.)
 pub struct Family {
     /// Name as written on the command line.
     pub name: &'static str,
@@ -84,8 +85,8 @@ fn build_fan(p: &Params) -> Result<Box<dyn Integrand>> {
 
 /// Every integrand family the parser knows.
 ///
-/// Hook for the renderer: its depth-of-field pixel integrand joins as one more entry here, e.g.
-/// `Family { name: "pixel", keys: &[("px", ..), ("py", ..)], build: |p| render::pixel::from_params(p), .. }`.
+/// Every analytic integrand family the parser knows (the renderer's `pixel:` is parsed apart, see
+/// [`Family`]).
 pub const FAMILIES: &[Family] = &[
     Family {
         name: "gaussian",
@@ -139,10 +140,16 @@ pub const FAMILIES: &[Family] = &[
 
 /// The family called `name`.
 pub fn family(name: &str) -> Result<&'static Family> {
+    if name == "pixel" {
+        return Err(Error::Usage(
+            "pixel needs its position and stands alone: write pixel:px=COLUMN,py=ROW (no @proj, + or *)"
+                .into(),
+        ));
+    }
     FAMILIES.iter().find(|f| f.name == name).ok_or_else(|| {
         let names: Vec<&str> = FAMILIES.iter().map(|f| f.name).collect();
         Error::Usage(format!(
-            "unknown integrand '{name}'; the integrands are {} (run `anisospec integrands` for their keys)",
+            "unknown integrand '{name}'; the integrands are {}, and pixel (run `anisospec integrands` for their keys)",
             names.join(", ")
         ))
     })
@@ -331,6 +338,22 @@ mod tests {
     }
 
     #[test]
+    fn listing_names_every_family_and_key_and_each_parses() {
+        let text = listing();
+        for f in FAMILIES {
+            assert!(text.contains(f.name));
+            for (k, _) in f.keys {
+                assert!(text.contains(&format!("    {k} ")), "{k}");
+            }
+            // Defaults build, and the name an integrand reports parses back to the same integrand.
+            let g = parse(f.name).unwrap();
+            let h = parse(&g.name()).unwrap();
+            assert_eq!(g.name(), h.name());
+            assert_eq!(g.reference(), h.reference());
+        }
+    }
+
+    #[test]
     fn bad_specs_say_what_is_wrong() {
         let msg = |s: &str| {
             let e = parse(s).err().unwrap_or_else(|| panic!("{s} should fail"));
@@ -347,5 +370,7 @@ mod tests {
         assert!(msg("gaussian*disc").contains("share a dimension"));
         assert!(msg("gaussian+disc@uv").contains("mixes"));
         assert!(msg("").contains("empty"));
+        assert!(msg("pixel").contains("pixel:px="));
+        assert!(msg("pixel@xu").contains("pixel:px="));
     }
 }

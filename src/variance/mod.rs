@@ -28,8 +28,9 @@ pub struct VarianceConfig {
     pub res: usize,
     /// If set to `m`, the grid at size `N` is `max(res, m·N)` (rounded up to even): a discontinuous
     /// integrand's variance under a stratified sampler comes from `|k|` up to a few `N`, so a grid that
-    /// grows with `N` keeps the white-noise tail estimate honest. Cheap when `f̂` is sparse (an aligned
-    /// edge lives on one axis); `O(N K²)` otherwise.
+    /// grows with `N` keeps the white-noise tail estimate honest. The sums over points are cheap when
+    /// `f̂` is sparse (an aligned edge lives on one axis), `O(N K²)` otherwise; `f̂` itself is evaluated
+    /// on the whole grid (at most 2^26 cells over all planes).
     pub res_per_n: Option<usize>,
     /// Realizations of the sampler over which `E[P]` is averaged (at least 2).
     pub realizations: usize,
@@ -87,6 +88,9 @@ struct Spectrum {
     total: f64,
 }
 
+/// Largest number of Fourier coefficients evaluated per prediction (grid cells summed over planes).
+const MAX_GRID: usize = 1 << 26;
+
 /// Frequencies below this fraction of the largest `|f̂|²` are left to the tail.
 const NEGLIGIBLE: f64 = 1e-20;
 
@@ -98,6 +102,12 @@ fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spe
             f.dims()
         ))
     })?;
+    if res.saturating_mul(res).saturating_mul(planes.len()) > MAX_GRID {
+        return Err(Error::Usage(format!(
+            "a {res} x {res} frequency grid on {} plane(s) is more than the {MAX_GRID} coefficients the prediction evaluates; lower --res or --res-per-n",
+            planes.len()
+        )));
+    }
     let half = (res / 2) as i64;
     let dims = f.dims();
     let mut active = Vec::with_capacity(planes.len());
@@ -118,8 +128,11 @@ fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spe
                 if planes[..pi].iter().any(|q| nonzero.iter().all(|&d| d == q.a || d == q.b)) {
                     return None;
                 }
-                let w = f.fourier(&k).map(|c| c.norm_sqr());
-                Some(w.map(|w| (idx, w, cone_index(k1, k2, cones))))
+                match f.fourier(&k).map(|c| c.norm_sqr()) {
+                    Some(w) if w > 0.0 => Some(Some((idx, w, cone_index(k1, k2, cones)))),
+                    Some(_) => None,
+                    None => Some(None),
+                }
             })
             .collect::<Option<Vec<_>>>()
             .ok_or_else(|| {

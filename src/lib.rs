@@ -6,10 +6,12 @@
 
 pub mod error;
 pub mod integrands;
+pub mod optimize;
 pub mod output;
 pub mod points;
 pub mod rng;
 pub mod samplers;
 pub mod spectrum;
+pub mod targets;
 
 pub use error::{Error, Result};

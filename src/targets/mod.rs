@@ -313,6 +313,23 @@ impl Target {
         self.grid_within(n, fit_radius)
     }
 
+    /// The area of the dark region in normalized frequency, i.e. its expected number of frequency
+    /// cells in units of `N` (an upper bound where parts overlap).
+    pub fn dark_area(&self) -> f64 {
+        use std::f64::consts::PI;
+        match self {
+            Target::Hairline(h) => 4.0 * h.half_width * h.length + PI * h.inner_radius.powi(2),
+            Target::DoubleWedge(d) => {
+                (d.s1.atan() - d.s0.atan()) * d.radius.powi(2) + PI * d.inner_radius.powi(2)
+            }
+            Target::BlueNoise(b) => PI * b.radius.powi(2),
+            Target::Image(i) => {
+                let dark = i.pixels.iter().filter(|&&v| v <= DARK_LEVEL).count();
+                dark as f64 / i.pixels.len().max(1) as f64 * (2.0 * i.extent).powi(2)
+            }
+        }
+    }
+
     /// The grid the fit is judged on: twice the fit radius of [`Target::grid`], so that energy pushed
     /// just beyond the optimized range is seen.
     pub fn check_grid(&self, n: usize) -> Result<TargetGrid> {
@@ -327,6 +344,11 @@ impl Target {
             return Err(Error::Usage(format!(
                 "-n {n}: an optimized set needs at least 2 points"
             )));
+        }
+        // Refuse hopeless targets before laying out a grid that may not fit in memory.
+        let estimate = self.dark_area() * n as f64;
+        if estimate > 4.0 * REACH * n as f64 {
+            return Err(self.beyond_reach(n, estimate));
         }
         let sqrt_n = (n as f64).sqrt();
         let res = 2 * (fit_radius.ceil() as usize) + 2;
@@ -351,11 +373,7 @@ impl Target {
         let dark_cells = dark.iter().filter(|&&d| d).count();
         let reach = REACH * n as f64;
         if dark_cells as f64 > reach {
-            return Err(Error::Input(format!(
-                "the {} target darkens {dark_cells} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}: reachable fraction {:.3}. Shrink its dark region (radius, length or half-width) by that factor in area",
-                self.kind(),
-                reach / dark_cells as f64
-            )));
+            return Err(self.beyond_reach(n, dark_cells as f64));
         }
         let others = inside.iter().filter(|&&c| c).count() - dark_cells;
         let wd = self.dark_weight();
@@ -377,6 +395,17 @@ impl Target {
             dark,
             dark_cells,
         })
+    }
+}
+
+impl Target {
+    fn beyond_reach(&self, n: usize, dark_cells: f64) -> Error {
+        let reach = REACH * n as f64;
+        Error::Input(format!(
+            "the {} target darkens {dark_cells:.0} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}: reachable fraction {:.3}. Shrink its dark region (radius, length or half-width) by that factor in area",
+            self.kind(),
+            reach / dark_cells
+        ))
     }
 }
 

@@ -22,8 +22,8 @@ pub struct Fit {
     pub dark_cells: usize,
     /// Mean expected `P` over the dark cells (goal: `≤ 0.1`); 0 when there are none.
     pub dark_mean: f64,
-    /// Largest `|mean P − mean T|` over the annuli `r − ½ ≤ |k| < r + ½` (non-dark cells inside the fit
-    /// radius, at least [`MIN_ANNULUS_CELLS`] of them) (goal: `≤ 0.1`).
+    /// Largest `|mean P − mean T|` over the annuli `r − ½ ≤ |k| < r + ½` that lie wholly inside the fit
+    /// radius, over their non-dark cells (at least [`MIN_ANNULUS_CELLS`] of them) (goal: `≤ 0.1`).
     pub annular_max_error: f64,
     /// The annulus with the largest error, as `|k| / sqrt(N)`.
     pub worst_radius: f64,
@@ -75,7 +75,8 @@ pub fn fit(points: &PointSets, proj: Projection, grid: &TargetGrid, method: Meth
     } else {
         0.0
     };
-    let bins = grid.fit_radius.floor() as usize + 1;
+    // Only whole annuli: r + ½ ≤ fit radius.
+    let bins = (grid.fit_radius - 0.5).floor().max(0.0) as usize;
     let mut acc = vec![(0.0f64, 0.0f64, 0usize); bins + 1];
     for idx in 0..res * res {
         if grid.weight[idx] == 0.0 || grid.dark[idx] {
@@ -83,7 +84,7 @@ pub fn fit(points: &PointSets, proj: Projection, grid: &TargetGrid, method: Meth
         }
         let (k1, k2) = ((idx % res) as f64 - half, (idx / res) as f64 - half);
         let r = k1.hypot(k2).round() as usize;
-        if r < acc.len() {
+        if r <= bins {
             acc[r].0 += p[idx];
             acc[r].1 += grid.target[idx];
             acc[r].2 += 1;

@@ -131,9 +131,10 @@ pub struct TargetGrid {
     pub fit_radius: f64,
     /// `T(k)`.
     pub target: Vec<f64>,
-    /// `W(k) ≥ 0`: `dark_weight / (dark cells)` on dark cells, `1 / (other cells)` on the others inside
+    /// `W(k) ≥ 0`: `dark_weight / (dark + rim cells)` on dark cells and on the rim (non-dark cells next
+    /// to a dark one, where pushed-out energy piles up first), `1 / (other cells)` on the others inside
     /// the fit radius, 0 at `k = 0`, on the unpaired row and column `−K/2`, and beyond the fit radius.
-    /// The loss is then `dark_weight ×` (mean squared error over the dark cells) `+` (the same outside).
+    /// The loss is then `dark_weight ×` (mean squared error over dark and rim) `+` (the same elsewhere).
     pub weight: Vec<f64>,
     /// Dark cells (`T ≤` [`DARK_LEVEL`]) inside the fit radius, excluding `k = 0`.
     pub dark: Vec<bool>,
@@ -375,15 +376,37 @@ impl Target {
         if dark_cells as f64 > reach {
             return Err(self.beyond_reach(n, dark_cells as f64));
         }
-        let others = inside.iter().filter(|&&c| c).count() - dark_cells;
+        // The rim: non-dark cells next to a dark one (8-neighbourhood), where the energy pushed out of
+        // the dark region piles up first. They get the dark cells' weight.
+        let rim: Vec<bool> = (0..res * res)
+            .map(|idx| {
+                let (i, j) = ((idx / res) as i64, (idx % res) as i64);
+                inside[idx]
+                    && !dark[idx]
+                    && (-1..=1).any(|di| {
+                        (-1..=1).any(|dj| {
+                            let (a, b) = (i + di, j + dj);
+                            a >= 0
+                                && b >= 0
+                                && a < res as i64
+                                && b < res as i64
+                                && dark[(a * res as i64 + b) as usize]
+                        })
+                    })
+            })
+            .collect();
+        let rim_cells = rim.iter().filter(|&&r| r).count();
+        let others = inside.iter().filter(|&&c| c).count() - dark_cells - rim_cells;
         let wd = self.dark_weight();
-        let weight = inside
-            .iter()
-            .zip(&dark)
-            .map(|(&inn, &d)| match (inn, d) {
-                (false, _) => 0.0,
-                (true, true) => wd / dark_cells as f64,
-                (true, false) => 1.0 / others.max(1) as f64,
+        let weight = (0..res * res)
+            .map(|idx| {
+                if !inside[idx] {
+                    0.0
+                } else if dark[idx] || rim[idx] {
+                    wd / (dark_cells + rim_cells) as f64
+                } else {
+                    1.0 / others.max(1) as f64
+                }
             })
             .collect();
         Ok(TargetGrid {

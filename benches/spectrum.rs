@@ -1,1 +1,135 @@
-fn main(){}
+//! Spectrum benchmarks (DESIGN §3).
+//!
+//! (a) `expected_spectrum`: the expected power spectrum of R = 100 random sets, N = 4096, K = 256,
+//!     eps = 1e-6, on ONE thread (100 × `power()`, summed).
+//! (b) `exact_vs_nufft`: exact DFT against NUFFT (eps = 1e-6) for N = 1024, K = 64, one thread.
+//! (c) `speed_vs_error`: one NUFFT power spectrum (N = 4096, K = 256) per eps = 1e-2 … 1e-12, with the
+//!     max relative error of P against the exact DFT (bins above 1e-3 of the mean), measured once
+//!     outside the timing loop. The table is printed to stderr and written to
+//!     `target/criterion/nufft_speed_vs_error.csv` (time per transform there is a plain wall-clock
+//!     mean over 20 runs; criterion's own figures are in its report).
+
+use anisospec::rng::stream;
+use anisospec::spectrum::nufft::Nufft2d;
+use anisospec::spectrum::{power, Method};
+use criterion::{criterion_group, criterion_main, Criterion};
+use rand::Rng as _;
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+fn random_set(n: usize, seed: u64, index: u64) -> Vec<[f64; 2]> {
+    let mut rng = stream(seed, index);
+    (0..n)
+        .map(|_| [rng.random::<f64>(), rng.random::<f64>()])
+        .collect()
+}
+
+fn one_thread() -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a one-thread rayon pool")
+}
+
+fn expected_spectrum(c: &mut Criterion) {
+    let (n, res, reps) = (4096, 256, 100);
+    let sets: Vec<Vec<[f64; 2]>> = (0..reps).map(|r| random_set(n, 1, r)).collect();
+    let method = Method::nufft(1e-6).unwrap();
+    let pool = one_thread();
+    let mut g = c.benchmark_group("expected_spectrum");
+    g.sample_size(10).measurement_time(Duration::from_secs(8));
+    g.bench_function("N4096_K256_R100_eps1e-6_1thread", |b| {
+        b.iter(|| {
+            pool.install(|| {
+                let mut acc = vec![0.0; res * res];
+                for s in &sets {
+                    for (a, p) in acc.iter_mut().zip(power(s, res, method)) {
+                        *a += p;
+                    }
+                }
+                black_box(acc)
+            })
+        })
+    });
+    g.finish();
+}
+
+fn exact_vs_nufft(c: &mut Criterion) {
+    let (n, res) = (1024, 64);
+    let pts = random_set(n, 2, 0);
+    let pool = one_thread();
+    let mut g = c.benchmark_group("exact_vs_nufft_N1024_K64_1thread");
+    g.sample_size(10);
+    g.bench_function("exact", |b| {
+        b.iter(|| pool.install(|| black_box(power(&pts, res, Method::Exact))))
+    });
+    let method = Method::nufft(1e-6).unwrap();
+    g.bench_function("nufft_eps1e-6", |b| {
+        b.iter(|| pool.install(|| black_box(power(&pts, res, method))))
+    });
+    g.finish();
+}
+
+/// Maximum relative error of `P` over the bins whose exact power is at least 1e-3 of the mean.
+fn max_rel_err(p: &[f64], exact: &[f64]) -> f64 {
+    let mean = exact.iter().sum::<f64>() / exact.len() as f64;
+    p.iter()
+        .zip(exact)
+        .filter(|(_, e)| **e >= 1e-3 * mean)
+        .map(|(a, e)| (a - e).abs() / e)
+        .fold(0.0, f64::max)
+}
+
+fn speed_vs_error(c: &mut Criterion) {
+    let (n, res) = (4096, 256);
+    let pts = random_set(n, 3, 0);
+    // The reference, once (parallel exact DFT).
+    let reference = power(&pts, res, Method::Exact);
+    let pool = one_thread();
+    let mut rows = Vec::new();
+    let mut g = c.benchmark_group("speed_vs_error_N4096_K256_1thread");
+    g.sample_size(10);
+    for e in 2..=12 {
+        let eps = 10f64.powi(-e);
+        let plan = Nufft2d::new(res, eps).unwrap();
+        let err = max_rel_err(&plan.power(&pts), &reference);
+        let runs = 20;
+        let t0 = Instant::now();
+        pool.install(|| {
+            for _ in 0..runs {
+                black_box(plan.power(&pts));
+            }
+        });
+        let secs = t0.elapsed().as_secs_f64() / runs as f64;
+        rows.push((eps, plan.kernel_width(), plan.fine_size(), secs, err));
+        g.bench_function(format!("eps1e-{e}"), |b| {
+            b.iter(|| pool.install(|| black_box(plan.power(&pts))))
+        });
+    }
+    g.finish();
+    let mut csv = String::from("eps,kernel_width,fine_grid,seconds_per_transform,max_rel_err_P,contract_10eps\n");
+    eprintln!("\n  eps     w   n   ms/transform  max rel err P  (≤ 10 eps?)");
+    for (eps, w, nf, secs, err) in &rows {
+        let ok = *err <= 10.0 * eps;
+        eprintln!(
+            "  {eps:.0e}  {w:2}  {nf}  {:10.3}    {err:.3e}      {}",
+            secs * 1e3,
+            if ok { "yes" } else { "NO" }
+        );
+        csv += &format!("{eps:e},{w},{nf},{secs:e},{err:e},{ok}\n");
+    }
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/criterion");
+    let dir = std::env::var_os("CARGO_TARGET_DIR")
+        .map(|d| std::path::PathBuf::from(d).join("criterion"))
+        .unwrap_or(dir);
+    if std::fs::create_dir_all(&dir).is_ok() {
+        let path = dir.join("nufft_speed_vs_error.csv");
+        match std::fs::write(&path, csv) {
+            Ok(()) => eprintln!("  table written to {}", path.display()),
+            Err(e) => eprintln!("  cannot write {}: {e}", path.display()),
+        }
+    }
+}
+
+criterion_group!(benches, expected_spectrum, exact_vs_nufft, speed_vs_error);
+criterion_main!(benches);

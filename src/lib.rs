@@ -4,14 +4,18 @@
 //! computed exactly or by NUFFT and viewed as radial, anisotropy and cone profiles; [`output`] writes
 //! npy, EXR, PNG and CSV.
 
+pub mod cli;
+pub mod converge;
 pub mod error;
 pub mod integrands;
 pub mod optimize;
 pub mod output;
 pub mod points;
+pub mod progress;
 pub mod rng;
 pub mod samplers;
 pub mod spectrum;
 pub mod targets;
+pub mod variance;
 
 pub use error::{Error, Result};

@@ -1,1 +1,79 @@
+//! The command-line front end: one module per subcommand, each a clap `Args` struct and a `run`.
+
+pub mod gallery;
 pub mod optimize;
+pub mod sample;
+pub mod spectrum;
+
+use crate::error::{Error, Result};
+use crate::points::shear::ShearMode;
+use crate::samplers::{self, Sampler};
+use std::path::{Path, PathBuf};
+
+/// Builds the sampler `name` in `dims` dimensions, sheared by `shear = (sx, sy)` if given (4D only).
+pub fn sampler_with_shear(
+    name: &str,
+    dims: usize,
+    shear: Option<(f64, f64)>,
+    mode: ShearMode,
+) -> Result<Box<dyn Sampler>> {
+    let inner = samplers::build(name, dims)?;
+    match shear {
+        None => Ok(inner),
+        Some(_) if dims != 4 => Err(Error::Usage(
+            "--shear applies to the xu and yv projections of 4D sets; add --dims 4".into(),
+        )),
+        Some((sx, sy)) => Ok(Box::new(samplers::Sheared::new(inner, sx, sy, mode)?)),
+    }
+}
+
+/// Parses `--shear sx,sy` (two finite numbers).
+pub fn parse_shear(text: &str) -> std::result::Result<(f64, f64), String> {
+    let parts: Vec<&str> = text.split(',').collect();
+    let nums: Option<Vec<f64>> = parts.iter().map(|p| p.trim().parse::<f64>().ok()).collect();
+    match nums.as_deref() {
+        Some([sx, sy]) if sx.is_finite() && sy.is_finite() => Ok((*sx, *sy)),
+        _ => Err(format!(
+            "'{text}' is not a shear; write two finite numbers sx,sy (e.g. 0.5,0.5), the shear of xu and of yv"
+        )),
+    }
+}
+
+/// Parses `--shear-mode`.
+pub fn parse_shear_mode(text: &str) -> std::result::Result<ShearMode, String> {
+    ShearMode::parse(text).map_err(|e| e.to_string())
+}
+
+/// The kinds of file a spectrum can be written as.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageKind {
+    /// numpy `float64 [K, K]`, raw values.
+    Npy,
+    /// OpenEXR, one `Y` channel of `f32` raw values.
+    Exr,
+    /// 8-bit greyscale, `log10 P` tone-mapped.
+    Png,
+}
+
+/// Checks every output path's extension before any work is done.
+pub fn image_kinds(outputs: &[PathBuf]) -> Result<Vec<ImageKind>> {
+    outputs
+        .iter()
+        .map(|p| match extension(p).as_deref() {
+            Some("npy") => Ok(ImageKind::Npy),
+            Some("exr") => Ok(ImageKind::Exr),
+            Some("png") => Ok(ImageKind::Png),
+            _ => Err(Error::Usage(format!(
+                "cannot tell the format of {}; name outputs .npy (raw numbers), .exr (float image) or .png (picture)",
+                p.display()
+            ))),
+        })
+        .collect()
+}
+
+/// The lower-case extension of a path.
+pub fn extension(path: &Path) -> Option<String> {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+}

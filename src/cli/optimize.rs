@@ -1,13 +1,13 @@
 //! `anisospec optimize`: point sets whose spectra meet a target, written as tables (npy, text, C
 //! header) with a JSON sidecar and a CSV log.
 
-use anisospec::error::{Error, Result};
-use anisospec::optimize::{self, loss::Repulsion, metrics, Limits, Setup, Strata};
-use anisospec::output::{ensure_not_input, write_atomic};
-use anisospec::points::io::write_points;
-use anisospec::points::PointSets;
-use anisospec::spectrum::Method;
-use anisospec::targets::Target;
+use crate::error::{Error, Result};
+use crate::optimize::{self, loss::Repulsion, metrics, Limits, Setup, Strata};
+use crate::output::{ensure_not_input, write_atomic};
+use crate::points::io::write_points;
+use crate::points::PointSets;
+use crate::spectrum::Method;
+use crate::targets::Target;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;

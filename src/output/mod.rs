@@ -2,6 +2,7 @@
 //! so a failed run leaves no half-written file.
 
 pub mod image;
+pub mod plot;
 
 use crate::error::{Error, Result};
 use std::io::{BufWriter, Write};

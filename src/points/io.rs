@@ -124,7 +124,7 @@ pub fn write_points(path: &Path, points: &PointSets) -> Result<()> {
                     writeln!(w, "#")?;
                 }
                 for p in points.set(s).chunks_exact(points.dims()) {
-                    let cells: Vec<String> = p.iter().map(|c| format!("{c:.17}")).collect();
+                    let cells: Vec<String> = p.iter().map(|c| format!("{c}")).collect();
                     writeln!(w, "{}", cells.join(" "))?;
                 }
             }

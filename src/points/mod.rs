@@ -69,7 +69,7 @@ impl PointSets {
                 "the sets have different numbers of points; every set must have the same N".into(),
             ));
         }
-        let n = if dims == 0 { 0 } else { len / dims };
+        let n = len.checked_div(dims).unwrap_or(0);
         Self::new(count, n, dims, sets.concat())
     }
 

@@ -4,6 +4,15 @@
 //! Every sampler draws a set from the generator it is handed, so a set is a function of the seed and
 //! the set's index only ([`generate_sets`]), whatever the thread count.
 
+pub mod compose;
+pub mod disk;
+pub mod grid;
+pub mod lowdisc;
+pub mod oa;
+pub mod pmj;
+
+pub use compose::{Paired, Pairing, Sheared};
+
 use crate::error::{Error, Result};
 use crate::points::PointSets;
 use crate::rng::{self, Rng};
@@ -60,4 +69,197 @@ pub fn generate_sets(sampler: &dyn Sampler, n: usize, sets: usize, seed: u64) ->
         .map(|s| sampler.generate(n, &mut rng::stream(seed, s as u64)))
         .collect();
     PointSets::from_sets(sampler.dims(), all)
+}
+
+/// The valid count nearest to `n` (at least 1) according to `valid`; ties go to the smaller count.
+pub(crate) fn nearest_valid(n: usize, valid: impl Fn(usize) -> bool) -> usize {
+    (0..)
+        .find_map(|d| {
+            let below = n.checked_sub(d).filter(|&c| c >= 1 && valid(c));
+            below.or_else(|| Some(n + d).filter(|&c| valid(c)))
+        })
+        .expect("some count is valid")
+}
+
+/// One entry of the sampler registry.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SamplerInfo {
+    /// Registry name (`padded-NAME` and `xuyv-NAME` stand for the families over every 2D `NAME`).
+    pub name: &'static str,
+    /// Dimensions the name can be built in (`&[2]`, `&[4]` or `&[2, 4]`).
+    pub dims: &'static [usize],
+    /// One line on what it is.
+    pub summary: &'static str,
+    /// Which point counts `N` it accepts.
+    pub valid_n: &'static str,
+}
+
+/// Names of the 2D samplers (each also usable as `padded-NAME` and `xuyv-NAME` in 4D).
+pub const NAMES_2D: [&str; 10] = [
+    "random", "jittered", "nrooks", "mj", "cmj", "pmj02", "poisson", "blue", "halton", "sobol",
+];
+
+/// Names of the native 4D samplers.
+pub const NAMES_4D: [&str; 6] = ["random", "jittered", "nrooks", "halton", "sobol", "oa"];
+
+/// Every sampler name with its dimensions, a summary and its valid `N`.
+pub fn catalog() -> Vec<SamplerInfo> {
+    let e = |name, dims, summary, valid_n| SamplerInfo {
+        name,
+        dims,
+        summary,
+        valid_n,
+    };
+    vec![
+        e("random", &[2, 4], "uniform random points (white noise)", "any N"),
+        e("jittered", &[2, 4], "one random point per cell of an m^D grid", "N = m^2 (2D), N = m^4 (4D)"),
+        e("nrooks", &[2, 4], "N-rooks / Latin hypercube: every 1D projection N-stratified", "any N"),
+        e("mj", &[2], "multi-jittered (Chiu, Shirley & Wang 1994): m x n cells and N-rooks", "N = m*n, m = floor(sqrt N) dividing N"),
+        e("cmj", &[2], "correlated multi-jittered (Kensler 2013): m x n cells and N-rooks, shared shuffles", "N = m*n, m = floor(sqrt N) dividing N"),
+        e("pmj02", &[2], "progressive multi-jittered (0,2) (Christensen et al. 2018); prefixes of 2^m are (0,m,2)-nets", "any N <= 2^20"),
+        e("poisson", &[2], "Poisson disk by dart throwing on the torus, radius 0.75 of hexagonal packing", "any N"),
+        e("blue", &[2], "blue noise: 20 Lloyd iterations on the torus (32 probes per point)", "any N"),
+        e("halton", &[2, 4], "Halton, bases 2,3 (2D) or 2,3,5,7 (4D), random digit permutations", "any N"),
+        e("sobol", &[2, 4], "Owen-scrambled Sobol (Burley 2020), f32 resolution", "any N <= 65536"),
+        e("oa", &[4], "orthogonal-array sampling, Bose OA(p^2, p+1, p, 2): 2D projections p x p, 1D N-stratified", "N = p^2, p an odd prime"),
+        e("padded-NAME", &[4], "Cook padding: 2D sets of NAME in xy and uv joined by a random permutation", "the N that NAME allows"),
+        e("xuyv-NAME", &[4], "2D sets of NAME in xu and yv joined by a random permutation", "the N that NAME allows"),
+    ]
+}
+
+/// A 2D sampler by name.
+fn build_2d(name: &str) -> Option<Box<dyn Sampler>> {
+    Some(match name {
+        "random" => Box::new(grid::Random { dims: 2 }),
+        "jittered" => Box::new(grid::Jittered { dims: 2 }),
+        "nrooks" => Box::new(grid::NRooks { dims: 2 }),
+        "mj" => Box::new(grid::MultiJittered),
+        "cmj" => Box::new(grid::CorrelatedMultiJittered),
+        "pmj02" => Box::new(pmj::Pmj02),
+        "poisson" => Box::new(disk::Poisson::default()),
+        "blue" => Box::new(disk::Blue),
+        "halton" => Box::new(lowdisc::Halton { dims: 2 }),
+        "sobol" => Box::new(lowdisc::Sobol { dims: 2 }),
+        _ => return None,
+    })
+}
+
+/// A native 4D sampler by name.
+fn build_4d(name: &str) -> Option<Box<dyn Sampler>> {
+    Some(match name {
+        "random" => Box::new(grid::Random { dims: 4 }),
+        "jittered" => Box::new(grid::Jittered { dims: 4 }),
+        "nrooks" => Box::new(grid::NRooks { dims: 4 }),
+        "halton" => Box::new(lowdisc::Halton { dims: 4 }),
+        "sobol" => Box::new(lowdisc::Sobol { dims: 4 }),
+        "oa" => Box::new(oa::OrthogonalArray),
+        _ => return None,
+    })
+}
+
+/// Edit distance with adjacent transpositions (optimal string alignment), for suggesting the closest
+/// name: `cjm` is one step from `cmj`.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    let w = b.len() + 1;
+    let mut d = vec![0usize; (a.len() + 1) * w];
+    for i in 0..=a.len() {
+        for j in 0..=b.len() {
+            d[i * w + j] = if i == 0 || j == 0 {
+                i + j
+            } else {
+                let sub = d[(i - 1) * w + j - 1] + usize::from(a[i - 1] != b[j - 1]);
+                let mut best = sub.min(d[(i - 1) * w + j] + 1).min(d[i * w + j - 1] + 1);
+                if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                    best = best.min(d[(i - 2) * w + j - 2] + 1);
+                }
+                best
+            };
+        }
+    }
+    d[a.len() * w + b.len()]
+}
+
+/// Every name valid in `dims` dimensions, families expanded.
+fn names_in(dims: usize) -> Vec<String> {
+    if dims == 2 {
+        NAMES_2D.iter().map(|s| s.to_string()).collect()
+    } else {
+        let mut v: Vec<String> = NAMES_4D.iter().map(|s| s.to_string()).collect();
+        for prefix in ["padded", "xuyv"] {
+            v.extend(NAMES_2D.iter().map(|s| format!("{prefix}-{s}")));
+        }
+        v
+    }
+}
+
+/// Builds the sampler `name` in `dims` (2 or 4) dimensions.
+///
+/// 2D: the names of [`NAMES_2D`]. 4D: [`NAMES_4D`], and `padded-NAME` / `xuyv-NAME` for every 2D
+/// `NAME`. An unknown name, a 2D-only name asked in 4D, or a 4D-only name asked in 2D is an
+/// `Error::Usage` that lists the valid names and suggests the closest.
+pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
+    if dims != 2 && dims != 4 {
+        return Err(Error::Usage(format!(
+            "--dims {dims} is not supported; samplers make 2D (x,y) or 4D (x,y,u,v) sets"
+        )));
+    }
+    if dims == 2 {
+        if let Some(s) = build_2d(name) {
+            return Ok(s);
+        }
+        if names_in(4).iter().any(|n| n == name) {
+            return Err(Error::Usage(format!(
+                "sampler '{name}' makes 4D sets; use --dims 4, or one of the 2D samplers: {}",
+                NAMES_2D.join(", ")
+            )));
+        }
+    } else {
+        if let Some(s) = build_4d(name) {
+            return Ok(s);
+        }
+        for pairing in [Pairing::Padded, Pairing::Xuyv] {
+            if let Some(inner) = name
+                .strip_prefix(pairing.prefix())
+                .and_then(|rest| rest.strip_prefix('-'))
+                .and_then(build_2d)
+            {
+                return Ok(Box::new(Paired::new(inner, pairing)?));
+            }
+        }
+        if build_2d(name).is_some() {
+            return Err(Error::Usage(format!(
+                "sampler '{name}' is 2D only; in 4D use padded-{name} (xy and uv) or xuyv-{name} (xu and yv)"
+            )));
+        }
+    }
+    let valid = names_in(dims);
+    let closest = valid
+        .iter()
+        .min_by_key(|n| edit_distance(name, n))
+        .expect("names exist");
+    Err(Error::Usage(format!(
+        "unknown {dims}D sampler '{name}' (did you mean '{closest}'?); valid names: {}",
+        valid.join(", ")
+    )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn edit_distance_counts_transpositions() {
+        assert_eq!(edit_distance("cjm", "cmj"), 1);
+        assert_eq!(edit_distance("sobol", "sobol"), 0);
+        assert_eq!(edit_distance("", "oa"), 2);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+    }
+
+    #[test]
+    fn nearest_valid_prefers_smaller_on_ties() {
+        assert_eq!(nearest_valid(50, |c| c == 49 || c == 51), 49);
+        assert_eq!(nearest_valid(3, |c| c == 1 || c == 5), 1);
+        assert_eq!(nearest_valid(1, |c| c == 9), 9);
+    }
 }

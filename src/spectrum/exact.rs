@@ -33,3 +33,31 @@ pub fn fourier_sums(points: &[[f64; 2]], res: usize) -> Vec<Complex64> {
     });
     out
 }
+
+/// Exact type 2 (the adjoint of [`fourier_sums`]): `g_j = Σ_k c(k) exp(+2πi k·x_j)` for coefficients
+/// `c` on the `res × res` grid (layout: see [`crate::spectrum`]). `O(N K²)`, parallel over points.
+///
+/// Panics if `coeffs.len() != res²`.
+pub fn type2(coeffs: &[Complex64], points: &[[f64; 2]], res: usize) -> Vec<Complex64> {
+    assert_eq!(
+        coeffs.len(),
+        res * res,
+        "type2 needs res² coefficients on the res × res grid"
+    );
+    points
+        .par_iter()
+        .map(|p| {
+            // exp(+2πi k c) = conj(exp(−2πi k c)).
+            let e1 = phases(p[0], res);
+            let e2 = phases(p[1], res);
+            coeffs
+                .chunks_exact(res)
+                .zip(&e2)
+                .map(|(row, b)| {
+                    let s: Complex64 = row.iter().zip(&e1).map(|(c, a)| c * a.conj()).sum();
+                    s * b.conj()
+                })
+                .sum()
+        })
+        .collect()
+}

@@ -5,9 +5,14 @@
 //! (first projected dimension) and `k2 = i − K/2` (second).
 
 pub mod exact;
+pub mod expected;
+pub mod profiles;
+pub mod nufft;
 
 use crate::error::{Error, Result};
+use nufft::Nufft2d;
 use rustfft::num_complex::Complex64;
+use std::sync::{Arc, Mutex};
 
 /// How Fourier sums are computed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -19,6 +24,46 @@ pub enum Method {
         /// Requested tolerance, in `[1e-14, 1e-1]`.
         eps: f64,
     },
+}
+
+impl Method {
+    /// The NUFFT method with tolerance `eps`, checked: `Error::Usage` unless `eps ∈ [1e-14, 1e-1]`.
+    pub fn nufft(eps: f64) -> Result<Self> {
+        // Planning validates eps (and a small even grid costs next to nothing).
+        Nufft2d::new(2, eps)?;
+        Ok(Method::Nufft { eps })
+    }
+}
+
+/// Plans reused by [`fourier_sums`] and [`power`], keyed by `(res, eps)`: most recently used last.
+static PLANS: Mutex<Vec<Arc<Nufft2d>>> = Mutex::new(Vec::new());
+/// How many plans [`PLANS`] keeps.
+const PLAN_CACHE: usize = 8;
+
+/// A shared NUFFT plan for `(res, eps)`, built once and reused across calls and threads.
+pub fn nufft_plan(res: usize, eps: f64) -> Result<Arc<Nufft2d>> {
+    let mut plans = PLANS.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(i) = plans
+        .iter()
+        .position(|p| p.res() == res && p.eps().to_bits() == eps.to_bits())
+    {
+        let plan = plans.remove(i);
+        plans.push(plan.clone());
+        return Ok(plan);
+    }
+    let plan = Arc::new(Nufft2d::new(res, eps)?);
+    if plans.len() == PLAN_CACHE {
+        plans.remove(0);
+    }
+    plans.push(plan.clone());
+    Ok(plan)
+}
+
+/// The plan for `method = Nufft`, panicking on parameters no checked constructor lets through.
+fn plan_or_panic(res: usize, eps: f64) -> Arc<Nufft2d> {
+    nufft_plan(res, eps).unwrap_or_else(|e| {
+        panic!("invalid NUFFT parameters (check them first with check_res and Method::nufft): {e}")
+    })
 }
 
 /// Checks a spectrum resolution `K`: even and positive.
@@ -33,18 +78,28 @@ pub fn check_res(res: usize) -> Result<()> {
 }
 
 /// The Fourier sums `F(k) = Σ_j exp(−2πi k·x_j)` of 2D points on the `res × res` grid.
+///
+/// The NUFFT path runs on the calling thread (parallelise over point sets); the exact path is
+/// parallel. Panics if `res` is odd or zero, or a NUFFT `eps` is out of range: check user input with
+/// [`check_res`] and [`Method::nufft`] first.
 pub fn fourier_sums(points: &[[f64; 2]], res: usize, method: Method) -> Vec<Complex64> {
     match method {
         Method::Exact => exact::fourier_sums(points, res),
-        Method::Nufft { .. } => exact::fourier_sums(points, res),
+        Method::Nufft { eps } => plan_or_panic(res, eps).type1(points),
     }
 }
 
-/// The power spectrum `P(k) = |F(k)|² / N` of 2D points on the `res × res` grid.
+/// The power spectrum `P(k) = |F(k)|² / N` of 2D points on the `res × res` grid (`P = 0` for an
+/// empty set). Panics as [`fourier_sums`] does.
 pub fn power(points: &[[f64; 2]], res: usize, method: Method) -> Vec<f64> {
-    let n = points.len() as f64;
-    fourier_sums(points, res, method)
-        .iter()
-        .map(|f| f.norm_sqr() / n)
-        .collect()
+    match method {
+        Method::Exact => {
+            let n = points.len().max(1) as f64;
+            exact::fourier_sums(points, res)
+                .iter()
+                .map(|f| f.norm_sqr() / n)
+                .collect()
+        }
+        Method::Nufft { eps } => plan_or_panic(res, eps).power(points),
+    }
 }

@@ -1,0 +1,119 @@
+//! `anisospec gallery`: the built-in default job — expected spectra of the classical samplers, 2D sets
+//! in `xy` and 4D sets in `xu`, written as PNG, npy and radial CSV with an index page.
+
+use super::ImageKind;
+use crate::error::Result;
+use crate::output::write_atomic;
+use crate::points::Projection;
+use crate::samplers::{self, Sampler};
+use crate::spectrum::expected::of_sampler;
+use crate::spectrum::profiles::{radial_profile, write_radial_csv};
+use crate::spectrum::{check_res, Method};
+use std::io::Write;
+use std::path::PathBuf;
+
+/// The 2D samplers shown in `xy`.
+const GALLERY_2D: [&str; 10] = [
+    "random", "jittered", "nrooks", "mj", "cmj", "pmj02", "poisson", "blue", "halton", "sobol",
+];
+/// The 4D samplers shown in `xu` (padded sets show the N-rooks cross or white noise there).
+const GALLERY_4D: [&str; 8] = [
+    "random",
+    "jittered",
+    "padded-mj",
+    "padded-sobol",
+    "sobol",
+    "halton",
+    "oa",
+    "xuyv-mj",
+];
+
+/// Spectra of every classical sampler in one folder.
+#[derive(Debug, clap::Args)]
+pub struct GalleryArgs {
+    /// Output folder; the gallery goes in OUT/gallery.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    /// Points per set; a sampler that cannot make this N uses its nearest valid N (the index says which).
+    #[arg(short = 'n', long = "n", default_value_t = 256)]
+    pub n: usize,
+    /// Frequency grid side K (even).
+    #[arg(long, default_value_t = 128)]
+    pub res: usize,
+    /// Realizations averaged per spectrum.
+    #[arg(long, default_value_t = 64)]
+    pub realizations: usize,
+    /// NUFFT tolerance.
+    #[arg(long, default_value_t = 1e-6)]
+    pub eps: f64,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// Runs `anisospec gallery`.
+pub fn run(args: &GalleryArgs) -> Result<()> {
+    check_res(args.res)?;
+    let method = Method::nufft(args.eps)?;
+    let dir = args.out.join("gallery");
+    let mut rows = Vec::new();
+    let jobs = GALLERY_2D
+        .iter()
+        .map(|&s| (s, 2, Projection::XY))
+        .chain(GALLERY_4D.iter().map(|&s| (s, 4, Projection::XU)));
+    for (name, dims, proj) in jobs {
+        let sampler = samplers::build(name, dims)?;
+        let n = usable_n(sampler.as_ref(), args.n);
+        let started = std::time::Instant::now();
+        let spec = of_sampler(
+            sampler.as_ref(),
+            n,
+            proj,
+            args.res,
+            args.realizations,
+            args.seed,
+            method,
+        )?;
+        let stem = format!("{dims}d_{name}_{}", proj.name());
+        let outputs = [
+            dir.join(format!("{stem}.png")),
+            dir.join(format!("{stem}.npy")),
+        ];
+        super::spectrum::write_spectrum(&spec, &outputs, &[ImageKind::Png, ImageKind::Npy])?;
+        write_radial_csv(
+            &dir.join(format!("{stem}_radial.csv")),
+            &radial_profile(&spec, 8),
+        )?;
+        eprintln!("{stem}: N = {n}, {:.2} s", started.elapsed().as_secs_f64());
+        rows.push((sampler.name(), dims, proj.name(), n, stem));
+    }
+    let index = dir.join("index.md");
+    write_atomic(&index, |w| {
+        writeln!(w, "# Expected power spectra of the classical samplers\n")?;
+        writeln!(
+            w,
+            "{} realizations each, K = {}, NUFFT eps = {}, seed {}. PNG: log10 P from -2 (black) to 1 (white), \
+             P = 1 (white noise) mid-grey, k1 horizontal, k2 up, k = 0 at the centre.\n",
+            args.realizations, args.res, args.eps, args.seed
+        )?;
+        writeln!(
+            w,
+            "| sampler | D | projection | N | spectrum | radial profile |"
+        )?;
+        writeln!(w, "|---|---|---|---|---|---|")?;
+        for (name, dims, proj, n, stem) in &rows {
+            writeln!(
+                w,
+                "| {name} | {dims} | {proj} | {n} | ![{stem}]({stem}.png) | [{stem}_radial.csv]({stem}_radial.csv) |"
+            )?;
+        }
+        Ok(())
+    })?;
+    eprintln!("gallery written to {}", index.display());
+    Ok(())
+}
+
+/// `n` if the sampler allows it, else its nearest valid N.
+fn usable_n(sampler: &dyn Sampler, n: usize) -> usize {
+    sampler.check_n(n).map_or_else(|nearest| nearest, |_| n)
+}

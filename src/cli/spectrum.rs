@@ -1,0 +1,168 @@
+//! `anisospec spectrum`: the expected power spectrum of a sampler or of a point file, in any projection.
+
+use super::{image_kinds, parse_shear, parse_shear_mode, sampler_with_shear, ImageKind};
+use crate::error::{Error, Result};
+use crate::output::image::{write_spectrum_exr, write_spectrum_png};
+use crate::output::{ensure_not_input, write_npy};
+use crate::points::io::read_points;
+use crate::points::shear::ShearMode;
+use crate::points::Projection;
+use crate::spectrum::expected::{of_sampler, of_sets, ExpectedSpectrum};
+use crate::spectrum::profiles::{radial_profile, write_radial_csv};
+use crate::spectrum::{check_res, Method};
+use std::path::PathBuf;
+
+/// Expected power spectrum P(k) = |Σ_j exp(−2πi k·x_j)|² / N of a sampler or a point file.
+#[derive(Debug, clap::Args)]
+#[command(group = clap::ArgGroup::new("source").required(true).args(["sampler", "input"]))]
+pub struct SpectrumArgs {
+    /// Sampler to draw the realizations from (see `anisospec samplers`).
+    #[arg(long)]
+    pub sampler: Option<String>,
+    /// Point file (.npy [sets, N, D] or .txt): each set is one realization.
+    #[arg(long)]
+    pub input: Option<PathBuf>,
+    /// Dimensions of the sampler's points (2 or 4); ignored with --input, whose D is read from the file.
+    #[arg(long, default_value_t = 2)]
+    pub dims: usize,
+    /// Points per set (with --sampler).
+    #[arg(short = 'n', long = "n", required_unless_present = "input")]
+    pub n: Option<usize>,
+    /// Projection: two of x,y,u,v (xy, uv, xu, yv, ...) or two dimension indices (0,2).
+    /// The first is the horizontal frequency k1, the second the vertical k2.
+    #[arg(long, default_value = "xy")]
+    pub proj: String,
+    /// Frequency grid side K (even): k1, k2 run over −K/2 … K/2−1.
+    #[arg(long, default_value_t = 128)]
+    pub res: usize,
+    /// Realizations averaged (independent sets). With --input, at most the number of sets in the file
+    /// (default: all of them).
+    #[arg(long)]
+    pub realizations: Option<usize>,
+    /// Use the exact O(N K²) DFT instead of the NUFFT.
+    #[arg(long, conflicts_with = "eps")]
+    pub exact: bool,
+    /// NUFFT tolerance (relative error of P), from 1e-14 to 1e-1.
+    #[arg(long, default_value_t = 1e-6)]
+    pub eps: f64,
+    /// Random seed of the realizations (with --sampler).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Shear the sampler's 4D sets by sx in xu and sy in yv (written sx,sy).
+    #[arg(long, value_parser = parse_shear, allow_hyphen_values = true)]
+    pub shear: Option<(f64, f64)>,
+    /// How --shear is applied: transported (seam-free, default) or wrap.
+    #[arg(long, value_parser = parse_shear_mode, default_value = "transported")]
+    pub shear_mode: ShearMode,
+    /// Output files, one or more (repeat -o or separate with commas): .npy (float64 [K, K], row i at
+    /// k2 = i − K/2, column j at k1 = j − K/2), .exr (raw values) or .png (log10 P over [−2, 1]).
+    /// Images put larger k2 on top.
+    #[arg(short = 'o', long, value_delimiter = ',', required = true)]
+    pub output: Vec<PathBuf>,
+    /// Also write the per-bin standard error of the mean spectrum as .npy.
+    #[arg(long)]
+    pub stderr: Option<PathBuf>,
+    /// Write the radial profile as CSV: r, r/sqrt(N), mean, stderr, anisotropy (dB) and, with --cones,
+    /// one column per directional cone.
+    #[arg(long)]
+    pub radial: Option<PathBuf>,
+    /// Number of directional cones in the radial CSV (cone c is centred on angle c·180°/M; cone 0 holds
+    /// the k1 axis).
+    #[arg(long, default_value_t = 0, requires = "radial")]
+    pub cones: usize,
+}
+
+/// Runs `anisospec spectrum`.
+pub fn run(args: &SpectrumArgs) -> Result<()> {
+    let kinds = image_kinds(&args.output)?;
+    check_res(args.res)?;
+    let method = if args.exact {
+        Method::Exact
+    } else {
+        Method::nufft(args.eps)?
+    };
+    for extra in [&args.radial, &args.stderr].into_iter().flatten() {
+        if extra.extension().is_none() {
+            return Err(Error::Usage(format!(
+                "{} has no extension; name it .csv (--radial) or .npy (--stderr)",
+                extra.display()
+            )));
+        }
+    }
+    let spec = match (&args.sampler, &args.input) {
+        (Some(name), _) => {
+            let sampler = sampler_with_shear(name, args.dims, args.shear, args.shear_mode)?;
+            let proj = Projection::parse(&args.proj, sampler.dims())?;
+            let n = args.n.expect("clap requires -n with --sampler");
+            let r = args.realizations.unwrap_or(32);
+            of_sampler(sampler.as_ref(), n, proj, args.res, r, args.seed, method)?
+        }
+        (None, Some(path)) => {
+            if args.shear.is_some() {
+                return Err(Error::Usage(
+                    "--shear applies to --sampler; shear the file's sets with `anisospec sample` instead".into(),
+                ));
+            }
+            let sets = read_points(path)?;
+            let proj = Projection::parse(&args.proj, sets.dims())?;
+            for out in args.output.iter().chain(&args.radial).chain(&args.stderr) {
+                ensure_not_input(out, Some(path))?;
+            }
+            let sets = match args.realizations {
+                Some(r) if r > sets.sets() => {
+                    return Err(Error::Usage(format!(
+                        "--realizations {r} but {} holds {} sets; ask for at most {}",
+                        path.display(),
+                        sets.sets(),
+                        sets.sets()
+                    )))
+                }
+                Some(r) => crate::points::PointSets::new(
+                    r,
+                    sets.n(),
+                    sets.dims(),
+                    sets.data()[..r * sets.n() * sets.dims()].to_vec(),
+                )?,
+                None => sets,
+            };
+            of_sets(&sets, proj, args.res, method)?
+        }
+        (None, None) => unreachable!("clap requires --sampler or --input"),
+    };
+    write_spectrum(&spec, &args.output, &kinds)?;
+    if let Some(path) = &args.stderr {
+        write_npy(path, &[spec.res, spec.res], &spec.stderr)?;
+    }
+    if let Some(path) = &args.radial {
+        write_radial_csv(path, &radial_profile(&spec, args.cones))?;
+    }
+    eprintln!(
+        "spectrum of {} realizations of {} points on a {}x{} grid written to {}",
+        spec.realizations,
+        spec.n,
+        spec.res,
+        spec.res,
+        args.output
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    Ok(())
+}
+
+/// Writes the mean spectrum to every output in its format.
+pub fn write_spectrum(
+    spec: &ExpectedSpectrum,
+    outputs: &[PathBuf],
+    kinds: &[ImageKind],
+) -> Result<()> {
+    for (path, kind) in outputs.iter().zip(kinds) {
+        match kind {
+            ImageKind::Npy => write_npy(path, &[spec.res, spec.res], &spec.mean)?,
+            ImageKind::Exr => write_spectrum_exr(path, &spec.mean, spec.res)?,
+            ImageKind::Png => write_spectrum_png(path, &spec.mean, spec.res)?,
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,251 @@
+//! Empirical convergence (DESIGN §4): for each `N`, `R` realizations, each an independent set from the
+//! sampler moved by its own random toroidal shift (and, optionally, the integrand placed at random);
+//! the mean squared error against the exact integral with its standard error, the wall time, and a
+//! power-law fit `MSE ∝ N^slope` with a confidence interval.
+//!
+//! Realization `r` at size `N` draws its points, its shift and its placement from sub-streams of
+//! `rng::substream(seed, r, ·)` keyed by `N`; errors are collected in realization order and reduced
+//! sequentially, so a seed gives the same bits whatever the thread count.
+
+pub mod fit;
+
+pub use fit::{fit_power_law, SlopeFit};
+
+use crate::error::{Error, Result};
+use crate::integrands::Integrand;
+use crate::points::toroidal_shift;
+use crate::rng;
+use crate::samplers::{validate_n, Sampler};
+use rand::Rng as _;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// How to run a convergence study.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConvergeConfig {
+    /// Realizations per `N` (at least 2, for a standard error).
+    pub realizations: usize,
+    /// Seed of every random choice.
+    pub seed: u64,
+    /// Move the integrand at random in each realization ([`Integrand::placed`]); each realization's
+    /// error is then taken against its own placement's integral.
+    pub random_placement: bool,
+}
+
+/// The measured error at one `N`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConvergePoint {
+    /// Points per set.
+    pub n: usize,
+    /// Mean squared error `mean_r (I_N,r − I)²`.
+    pub mse: f64,
+    /// Standard error of `mse` (sample standard deviation of the squared errors over `sqrt(R)`).
+    pub mse_stderr: f64,
+    /// Mean signed error `mean_r (I_N,r − I)`: near 0 for an unbiased estimator.
+    pub mean_error: f64,
+    /// Wall time of this `N` (sampling and integration of all realizations), seconds.
+    pub seconds: f64,
+    /// Integrand evaluations made: `N · R`.
+    pub evaluations: u64,
+}
+
+/// A convergence study of one sampler on one integrand.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Convergence {
+    /// Sampler name.
+    pub sampler: String,
+    /// Integrand name.
+    pub integrand: String,
+    /// One entry per requested `N`, in order.
+    pub points: Vec<ConvergePoint>,
+    /// `MSE ∝ N^slope` fitted over all points (`None` with fewer than two `N` or a zero MSE).
+    pub fit: Option<SlopeFit>,
+}
+
+/// Checks a list of `N` and a realization count shared by the variance and convergence studies.
+pub fn check_plan(sampler: &dyn Sampler, f: &dyn Integrand, ns: &[usize], realizations: usize) -> Result<()> {
+    if sampler.dims() != f.dims() {
+        return Err(Error::Usage(format!(
+            "the sampler {} makes {}D points but the integrand {} is {}D; use a {}D sampler (e.g. padded-... for 4D) or place the integrand with @xy",
+            sampler.name(),
+            sampler.dims(),
+            f.name(),
+            f.dims(),
+            f.dims()
+        )));
+    }
+    if ns.is_empty() {
+        return Err(Error::Usage("--n lists no sizes; give e.g. --n 16,64,256".into()));
+    }
+    if realizations < 2 {
+        return Err(Error::Usage(format!(
+            "--realizations {realizations} gives no standard error; use at least 2 (e.g. 100)"
+        )));
+    }
+    for &n in ns {
+        validate_n(sampler, n)?;
+    }
+    Ok(())
+}
+
+/// The error `I_N − I` of realization `r` at size `n`.
+pub fn realization_error(sampler: &dyn Sampler, f: &dyn Integrand, n: usize, r: usize, cfg: &ConvergeConfig) -> f64 {
+    let key = 3 * n as u64;
+    let mut set = sampler.generate(n, &mut rng::substream(cfg.seed, r as u64, key));
+    let dims = sampler.dims();
+    let mut shift_rng = rng::substream(cfg.seed, r as u64, key + 1);
+    let shift: Vec<f64> = (0..dims).map(|_| shift_rng.random::<f64>()).collect();
+    toroidal_shift(&mut set, &shift);
+    let placed = if cfg.random_placement {
+        f.placed(&mut rng::substream(cfg.seed, r as u64, key + 2))
+    } else {
+        None
+    };
+    let g: &dyn Integrand = placed.as_deref().unwrap_or(f);
+    let sum: f64 = set.chunks_exact(dims).map(|p| g.eval(p)).sum();
+    sum / n as f64 - g.reference().value
+}
+
+/// The mean squared error and its standard error at one `N`.
+pub fn measure(sampler: &dyn Sampler, f: &dyn Integrand, n: usize, cfg: &ConvergeConfig) -> Result<ConvergePoint> {
+    check_plan(sampler, f, &[n], cfg.realizations)?;
+    let start = Instant::now();
+    let errors: Vec<f64> = (0..cfg.realizations)
+        .into_par_iter()
+        .map(|r| realization_error(sampler, f, n, r, cfg))
+        .collect();
+    let seconds = start.elapsed().as_secs_f64();
+    let rr = errors.len() as f64;
+    let mse = errors.iter().map(|e| e * e).sum::<f64>() / rr;
+    let var_sq = errors.iter().map(|e| (e * e - mse).powi(2)).sum::<f64>() / (rr - 1.0);
+    let point = ConvergePoint {
+        n,
+        mse,
+        mse_stderr: (var_sq / rr).sqrt(),
+        mean_error: errors.iter().sum::<f64>() / rr,
+        seconds,
+        evaluations: (n * cfg.realizations) as u64,
+    };
+    if !point.mse.is_finite() {
+        return Err(Error::Numerical(format!(
+            "{} on {} at N = {n} gave a non-finite error; the integrand returned NaN or infinity",
+            sampler.name(),
+            f.name()
+        )));
+    }
+    Ok(point)
+}
+
+/// Runs the study for every `N` of `ns` and fits the slope. `progress` is called after each `N`.
+pub fn converge(
+    sampler: &dyn Sampler,
+    f: &dyn Integrand,
+    ns: &[usize],
+    cfg: &ConvergeConfig,
+    mut progress: impl FnMut(&ConvergePoint),
+) -> Result<Convergence> {
+    check_plan(sampler, f, ns, cfg.realizations)?;
+    let mut points = Vec::with_capacity(ns.len());
+    for &n in ns {
+        let p = measure(sampler, f, n, cfg)?;
+        progress(&p);
+        points.push(p);
+    }
+    let fit = fit_points(&points);
+    Ok(Convergence {
+        sampler: sampler.name(),
+        integrand: f.name(),
+        points,
+        fit,
+    })
+}
+
+fn fit_points(points: &[ConvergePoint]) -> Option<SlopeFit> {
+    let n: Vec<f64> = points.iter().map(|p| p.n as f64).collect();
+    let v: Vec<f64> = points.iter().map(|p| p.mse).collect();
+    let se: Vec<f64> = points.iter().map(|p| p.mse_stderr).collect();
+    fit_power_law(&n, &v, &se).ok()
+}
+
+/// CSV rows for [`write_csv`]: one row per sampler and `N`.
+pub const CSV_HEADER: &[&str] = &[
+    "sampler",
+    "integrand",
+    "n",
+    "mse",
+    "mse_stderr",
+    "mean_error",
+    "seconds",
+    "evaluations",
+    "slope",
+    "slope_ci_low",
+    "slope_ci_high",
+];
+
+/// Writes studies as CSV (atomically): the columns of [`CSV_HEADER`]; the slope columns repeat the
+/// sampler's fit on each of its rows (empty when there is no fit).
+pub fn write_csv(path: &std::path::Path, studies: &[Convergence]) -> Result<()> {
+    use std::io::Write;
+    crate::output::write_atomic(path, |w| {
+        writeln!(w, "{}", CSV_HEADER.join(","))?;
+        for s in studies {
+            let (slope, lo, hi) = match &s.fit {
+                Some(f) => (f.slope.to_string(), f.ci95.0.to_string(), f.ci95.1.to_string()),
+                None => (String::new(), String::new(), String::new()),
+            };
+            for p in &s.points {
+                writeln!(
+                    w,
+                    "{},{},{},{:e},{:e},{:e},{},{},{slope},{lo},{hi}",
+                    s.sampler,
+                    csv_field(&s.integrand),
+                    p.n,
+                    p.mse,
+                    p.mse_stderr,
+                    p.mean_error,
+                    p.seconds,
+                    p.evaluations
+                )?;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// Quotes a CSV field that holds a comma.
+pub fn csv_field(s: &str) -> String {
+    if s.contains(',') || s.contains('"') {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// The log-log plot of studies: MSE against N with ±1 standard error bars, one line per sampler,
+/// slopes (with 95% intervals) in the legend.
+pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Result<()> {
+    use crate::output::plot::{write_loglog_png, LogLogPlot, Series};
+    let series: Vec<Series> = studies
+        .iter()
+        .map(|s| Series {
+            label: match &s.fit {
+                Some(f) => format!("{}: slope {:.2} [{:.2}, {:.2}]", s.sampler, f.slope, f.ci95.0, f.ci95.1),
+                None => s.sampler.clone(),
+            },
+            points: s.points.iter().map(|p| (p.n as f64, p.mse)).collect(),
+            errors: Some(s.points.iter().map(|p| p.mse_stderr).collect()),
+            dashed: false,
+        })
+        .collect();
+    write_loglog_png(
+        path,
+        &LogLogPlot {
+            title: title.to_string(),
+            x_label: "N (samples)".into(),
+            y_label: "mean squared error".into(),
+            series,
+            width: 900,
+            height: 650,
+        },
+    )
+}

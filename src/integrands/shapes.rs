@@ -1,0 +1,573 @@
+//! The 2D integrand families: periodic Gaussian, disc, half-plane steps (oriented or sheared) and the
+//! fan of sheared edges. Coordinates are `(x1, x2)` of `[0,1)²`; placed on a 4D projection by
+//! [`super::compose::Embed`], `(x1, x2)` become e.g. `(x, u)`.
+
+use super::polygon;
+use super::quad;
+use super::{Integrand, Reference};
+use crate::error::{Error, Result};
+use crate::points::wrap;
+use crate::rng::Rng;
+use rand::Rng as _;
+use rustfft::num_complex::Complex64;
+use std::f64::consts::PI;
+
+fn finite(name: &str, key: &str, v: f64) -> Result<f64> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(Error::Usage(format!("{name}: {key}={v} is not a finite number")))
+    }
+}
+
+/// `exp(−2πi k·c)`, with `k·c` reduced mod 1 first.
+fn phase(k: [i64; 2], c: [f64; 2]) -> Complex64 {
+    let t = (k[0] as f64 * c[0] + k[1] as f64 * c[1]).rem_euclid(1.0);
+    let (s, co) = (2.0 * PI * t).sin_cos();
+    Complex64::new(co, -s)
+}
+
+fn k2(k: &[i64]) -> [i64; 2] {
+    [k[0], k[1]]
+}
+
+/// A Gaussian bump of width `sigma`, peak 1, centred at `centre` and made periodic on the torus (the
+/// sum of its images), so that it is smooth on the torus: `f(x) = Σ_m exp(−|x − c − m|² / (2σ²))`.
+///
+/// Integral `2πσ²`; `f̂(k) = 2πσ² exp(−2π²σ²|k|²) exp(−2πi k·c)`: both exact.
+#[derive(Clone, Debug)]
+pub struct Gaussian {
+    sigma: f64,
+    centre: [f64; 2],
+    images: i64,
+}
+
+impl Gaussian {
+    /// `sigma` in `(0, 1]` (units of the domain), `centre` in `[0, 1]²`.
+    pub fn new(sigma: f64, centre: [f64; 2]) -> Result<Self> {
+        finite("gaussian", "sigma", sigma)?;
+        if sigma <= 0.0 || sigma > 1.0 {
+            return Err(Error::Usage(format!(
+                "gaussian: sigma={sigma} is not a width in (0, 1]; give a positive sigma no wider than the domain, e.g. sigma=0.15"
+            )));
+        }
+        for (key, c) in [("cx", centre[0]), ("cy", centre[1])] {
+            if !(0.0..=1.0).contains(&finite("gaussian", key, c)?) {
+                return Err(Error::Usage(format!(
+                    "gaussian: {key}={c} puts the centre outside the unit square; use a value in [0, 1]"
+                )));
+            }
+        }
+        // Images farther than M − ½ contribute below exp(−40) of the peak.
+        let images = (0.5 + sigma * 80f64.sqrt()).ceil() as i64;
+        Ok(Self {
+            sigma,
+            centre,
+            images,
+        })
+    }
+
+    /// The periodic 1D factor at offset `d` from the centre.
+    fn factor(&self, d: f64) -> f64 {
+        let mut d = wrap(d);
+        if d >= 0.5 {
+            d -= 1.0;
+        }
+        let s2 = 2.0 * self.sigma * self.sigma;
+        (-self.images..=self.images)
+            .map(|m| {
+                let t = d + m as f64;
+                (-t * t / s2).exp()
+            })
+            .sum()
+    }
+
+    /// `Σ_{k ∈ Z} exp(−4π²σ²k²)`, by the Poisson dual `Σ_m exp(−m²/(4σ²)) / (2σ√π)` when σ is small.
+    fn theta_sum(&self) -> f64 {
+        let s = self.sigma;
+        if s < 0.25 {
+            let terms = (s * 2.0 * 50f64.sqrt()).ceil() as i64 + 1;
+            (-terms..=terms)
+                .map(|m| (-((m * m) as f64) / (4.0 * s * s)).exp())
+                .sum::<f64>()
+                / (2.0 * s * PI.sqrt())
+        } else {
+            let terms = (50f64.sqrt() / (2.0 * PI * s)).ceil() as i64 + 1;
+            (-terms..=terms)
+                .map(|k| (-4.0 * PI * PI * s * s * (k * k) as f64).exp())
+                .sum()
+        }
+    }
+}
+
+impl Integrand for Gaussian {
+    fn name(&self) -> String {
+        format!(
+            "gaussian:sigma={},cx={},cy={}",
+            self.sigma, self.centre[0], self.centre[1]
+        )
+    }
+    fn dims(&self) -> usize {
+        2
+    }
+    fn eval(&self, x: &[f64]) -> f64 {
+        self.factor(x[0] - self.centre[0]) * self.factor(x[1] - self.centre[1])
+    }
+    fn reference(&self) -> Reference {
+        Reference {
+            value: 2.0 * PI * self.sigma * self.sigma,
+            stderr: 0.0,
+        }
+    }
+    fn fourier(&self, k: &[i64]) -> Option<Complex64> {
+        let kk = (k[0] * k[0] + k[1] * k[1]) as f64;
+        let amp = 2.0 * PI * self.sigma * self.sigma * (-2.0 * PI * PI * self.sigma * self.sigma * kk).exp();
+        Some(phase(k2(k), self.centre) * amp)
+    }
+    fn mean_square(&self) -> Option<f64> {
+        let a = 2.0 * PI * self.sigma * self.sigma * self.theta_sum();
+        Some(a * a)
+    }
+    /// Centre uniform on the torus.
+    fn placed(&self, rng: &mut Rng) -> Option<Box<dyn Integrand>> {
+        let mut g = self.clone();
+        g.centre = [rng.random::<f64>(), rng.random::<f64>()];
+        Some(Box::new(g))
+    }
+}
+
+/// The indicator of a disc of radius `r` centred at `centre`, wholly inside the unit square.
+///
+/// Integral `πr²`; `f̂(k) = r J1(2πr|k|) / |k| · exp(−2πi k·c)`: both exact (J1 from `libm`).
+#[derive(Clone, Debug)]
+pub struct Disc {
+    r: f64,
+    centre: [f64; 2],
+}
+
+impl Disc {
+    /// `r > 0` and the disc inside `[0,1]²`: `r ≤ cx ≤ 1 − r`, `r ≤ cy ≤ 1 − r`.
+    pub fn new(r: f64, centre: [f64; 2]) -> Result<Self> {
+        finite("disc", "r", r)?;
+        if r <= 0.0 || r > 0.5 {
+            return Err(Error::Usage(format!(
+                "disc: r={r} is not a radius in (0, 0.5]; a disc inside the unit square has 0 < r <= 0.5"
+            )));
+        }
+        for (key, c) in [("cx", centre[0]), ("cy", centre[1])] {
+            finite("disc", key, c)?;
+            if c < r || c > 1.0 - r {
+                return Err(Error::Usage(format!(
+                    "disc: {key}={c} with r={r} puts the disc outside the domain [0,1]²; keep {r} <= {key} <= {}",
+                    1.0 - r
+                )));
+            }
+        }
+        Ok(Self { r, centre })
+    }
+}
+
+impl Integrand for Disc {
+    fn name(&self) -> String {
+        format!("disc:r={},cx={},cy={}", self.r, self.centre[0], self.centre[1])
+    }
+    fn dims(&self) -> usize {
+        2
+    }
+    fn eval(&self, x: &[f64]) -> f64 {
+        let (dx, dy) = (x[0] - self.centre[0], x[1] - self.centre[1]);
+        f64::from(u8::from(dx * dx + dy * dy < self.r * self.r))
+    }
+    fn reference(&self) -> Reference {
+        Reference {
+            value: PI * self.r * self.r,
+            stderr: 0.0,
+        }
+    }
+    fn fourier(&self, k: &[i64]) -> Option<Complex64> {
+        if k[0] == 0 && k[1] == 0 {
+            return Some(Complex64::new(PI * self.r * self.r, 0.0));
+        }
+        let kn = ((k[0] * k[0] + k[1] * k[1]) as f64).sqrt();
+        Some(phase(k2(k), self.centre) * (self.r * libm::j1(2.0 * PI * self.r * kn) / kn))
+    }
+    fn mean_square(&self) -> Option<f64> {
+        Some(PI * self.r * self.r)
+    }
+    /// Centre uniform over the positions that keep the disc inside the square.
+    fn placed(&self, rng: &mut Rng) -> Option<Box<dyn Integrand>> {
+        let span = 1.0 - 2.0 * self.r;
+        let mut d = self.clone();
+        d.centre = [
+            self.r + span * rng.random::<f64>(),
+            self.r + span * rng.random::<f64>(),
+        ];
+        Some(Box::new(d))
+    }
+}
+
+/// The range `(lo, hi)` of `n·x` over the unit square's corners: the offsets `c` for which the edge
+/// `n·x = c` crosses the square.
+fn corner_range(n: [f64; 2]) -> (f64, f64) {
+    let v = [0.0, n[0], n[1], n[0] + n[1]];
+    (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+}
+
+/// What a [`HalfPlane`] is called and how it was parametrized, for its name.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EdgeKind {
+    /// `step:theta=θ`: normal `(cos θ, sin θ)`, θ in degrees; θ = 0 is an edge aligned with the `x2` axis.
+    Oriented {
+        /// Angle of the edge normal from the `x1` axis, degrees.
+        theta_deg: f64,
+    },
+    /// `sheared:s=s`: the edge `x1 + s x2 = c` (in a projection `xu`: `x + s u = c`).
+    Sheared {
+        /// The shear `s`.
+        s: f64,
+    },
+}
+
+/// A step: 1 on the part of the unit square where `n·x < c`, 0 elsewhere (a polygon; on the torus the
+/// square's sides are edges too).
+///
+/// Integral = the polygon's area; `f̂` by the polygon formula: both exact.
+#[derive(Clone, Debug)]
+pub struct HalfPlane {
+    kind: EdgeKind,
+    normal: [f64; 2],
+    c: f64,
+    poly: Vec<[f64; 2]>,
+}
+
+impl HalfPlane {
+    /// An oriented step at angle `theta_deg` (degrees) with offset `c` (`None`: through the centre).
+    pub fn oriented(theta_deg: f64, c: Option<f64>) -> Result<Self> {
+        let t = finite("step", "theta", theta_deg)?.to_radians();
+        Self::build(EdgeKind::Oriented { theta_deg }, [t.cos(), t.sin()], c, "step")
+    }
+
+    /// The sheared step `x1 + s x2 < c` (`None`: the edge through the centre, `c = (1 + s)/2`).
+    pub fn sheared(s: f64, c: Option<f64>) -> Result<Self> {
+        finite("sheared", "s", s)?;
+        Self::build(EdgeKind::Sheared { s }, [1.0, s], c, "sheared")
+    }
+
+    fn build(kind: EdgeKind, normal: [f64; 2], c: Option<f64>, family: &str) -> Result<Self> {
+        let (lo, hi) = corner_range(normal);
+        let c = match c {
+            Some(c) => finite(family, "c", c)?,
+            None => 0.5 * (normal[0] + normal[1]),
+        };
+        if c <= lo || c >= hi {
+            return Err(Error::Usage(format!(
+                "{family}: the edge at c={c} misses the unit square (it crosses it for {lo:.4} < c < {hi:.4}); choose c in that range"
+            )));
+        }
+        Ok(Self {
+            kind,
+            normal,
+            c,
+            poly: polygon::clip_square(normal, c),
+        })
+    }
+}
+
+impl Integrand for HalfPlane {
+    fn name(&self) -> String {
+        match self.kind {
+            EdgeKind::Oriented { theta_deg } => format!("step:theta={theta_deg},c={}", self.c),
+            EdgeKind::Sheared { s } => format!("sheared:s={s},c={}", self.c),
+        }
+    }
+    fn dims(&self) -> usize {
+        2
+    }
+    fn eval(&self, x: &[f64]) -> f64 {
+        f64::from(u8::from(self.normal[0] * x[0] + self.normal[1] * x[1] < self.c))
+    }
+    fn reference(&self) -> Reference {
+        Reference {
+            value: polygon::area(&self.poly),
+            stderr: 0.0,
+        }
+    }
+    fn fourier(&self, k: &[i64]) -> Option<Complex64> {
+        Some(polygon::fourier(&self.poly, k2(k)))
+    }
+    fn mean_square(&self) -> Option<f64> {
+        Some(polygon::area(&self.poly))
+    }
+    /// Offset `c` uniform over the range where the edge crosses the square.
+    fn placed(&self, rng: &mut Rng) -> Option<Box<dyn Integrand>> {
+        let (lo, hi) = corner_range(self.normal);
+        let mut c = lo + (hi - lo) * rng.random::<f64>();
+        if c <= lo {
+            c = 0.5 * (lo + hi);
+        }
+        let mut h = self.clone();
+        h.c = c;
+        h.poly = polygon::clip_square(self.normal, c);
+        Some(Box::new(h))
+    }
+}
+
+/// A fan of sheared edges: the mean over shears `s` uniform on `[s0, s1]` of the steps
+/// `H(c − x1 − s x2)`. For `x2 > 0` it is the clamped ramp `clamp((c − s0 x2 − x1) / ((s1 − s0) x2), 0, 1)`;
+/// its spectrum fills the double wedge between the lines of slopes `s0` and `s1`.
+///
+/// Evaluation is exact. The integral and `∫f²` come from Gauss–Legendre quadrature in `x2` of an exact
+/// inner integral, cut at every kink (error near machine precision); `f̂(k)` is the quadrature in `s` of
+/// the exact step coefficients, with absolute error below [`FAN_FOURIER_ERROR`] (checked in the tests
+/// against a rule with four times the panels).
+#[derive(Clone, Debug)]
+pub struct Fan {
+    s0: f64,
+    s1: f64,
+    c: f64,
+    integral: f64,
+    square: f64,
+}
+
+/// Bound on the absolute error of [`Fan`]'s Fourier coefficients.
+pub const FAN_FOURIER_ERROR: f64 = 1e-11;
+
+/// Gauss–Legendre points per panel for the fan's quadratures.
+const FAN_RULE: usize = 16;
+
+impl Fan {
+    /// Shears `s0 < s1`, offset `c` (`None`: the mean edge through the centre, `c = (1 + (s0+s1)/2)/2`).
+    pub fn new(s0: f64, s1: f64, c: Option<f64>) -> Result<Self> {
+        finite("fan", "s0", s0)?;
+        finite("fan", "s1", s1)?;
+        if s0 > s1 {
+            return Err(Error::Usage(format!(
+                "fan: s0={s0} > s1={s1}; the shears run from s0 up to s1, so swap them (fan:s0={s1},s1={s0})"
+            )));
+        }
+        if s0 == s1 {
+            return Err(Error::Usage(format!(
+                "fan: s0 = s1 = {s0} is a single edge, not a fan; use sheared:s={s0} or widen [s0, s1]"
+            )));
+        }
+        let c = match c {
+            Some(c) => finite("fan", "c", c)?,
+            None => 0.5 * (1.0 + 0.5 * (s0 + s1)),
+        };
+        let (lo, hi) = (s0.min(0.0), 1.0 + s1.max(0.0));
+        if c <= lo || c >= hi {
+            return Err(Error::Usage(format!(
+                "fan: the edges at c={c} miss the unit square (they cross it for {lo:.4} < c < {hi:.4}); choose c in that range"
+            )));
+        }
+        let mut fan = Self {
+            s0,
+            s1,
+            c,
+            integral: 0.0,
+            square: 0.0,
+        };
+        fan.integral = fan.moment(1);
+        fan.square = fan.moment(2);
+        Ok(fan)
+    }
+
+    /// `∫_0^1 f(x1, u)^p dx1` for `p` = 1 or 2, exact.
+    fn inner(&self, u: f64, p: i32) -> f64 {
+        let w = (self.s1 - self.s0) * u;
+        if w <= 0.0 {
+            return self.c.clamp(0.0, 1.0);
+        }
+        let a = self.c - self.s0 * u; // f = 0 from here on
+        let b = a - w; // f = 1 up to here
+        let mut total = b.clamp(0.0, 1.0);
+        let (xl, xr) = (b.max(0.0), a.min(1.0));
+        if xr > xl {
+            let q = f64::from(p + 1);
+            total += w / q * (((a - xl) / w).powi(p + 1) - ((a - xr) / w).powi(p + 1));
+        }
+        total
+    }
+
+    /// `∫ f^p` over the square: quadrature in `u` cut where the ramp's ends cross `x1 = 0` or `x1 = 1`.
+    fn moment(&self, p: i32) -> f64 {
+        let mut breaks = Vec::new();
+        for s in [self.s0, self.s1] {
+            if s != 0.0 {
+                breaks.push(self.c / s);
+                breaks.push((self.c - 1.0) / s);
+            }
+        }
+        let rule = quad::gauss_legendre(FAN_RULE);
+        quad::integrate(&rule, 0.0, 1.0, &breaks, 4, |u| self.inner(u, p))
+    }
+
+    /// `f̂(k)` with `refine` times the default number of panels.
+    fn fourier_refined(&self, k: [i64; 2], refine: usize) -> Complex64 {
+        let len = self.s1 - self.s0;
+        // A vertex of the step moves at speed up to 1/min(c, 1−c, 1) in s: the phase turns by about
+        // 2π |k|₁ · speed · len over the range; give each panel about one turn.
+        let speed = 1.0 / self.c.clamp(0.02, 1.0).min((1.0 - self.c).abs().clamp(0.02, 1.0));
+        let turns = (k[0].unsigned_abs() + k[1].unsigned_abs()) as f64 * speed * len;
+        let panels = refine * (2 + turns.ceil() as usize);
+        let rule = quad::gauss_legendre(FAN_RULE);
+        let sum: Complex64 = quad::integrate(&rule, self.s0, self.s1, &[self.c, self.c - 1.0], panels, |s| {
+            polygon::fourier(&polygon::clip_square([1.0, s], self.c), k)
+        });
+        sum / len
+    }
+}
+
+impl Integrand for Fan {
+    fn name(&self) -> String {
+        format!("fan:s0={},s1={},c={}", self.s0, self.s1, self.c)
+    }
+    fn dims(&self) -> usize {
+        2
+    }
+    fn eval(&self, x: &[f64]) -> f64 {
+        let w = (self.s1 - self.s0) * x[1];
+        if w <= 0.0 {
+            return f64::from(u8::from(x[0] < self.c));
+        }
+        ((self.c - self.s0 * x[1] - x[0]) / w).clamp(0.0, 1.0)
+    }
+    fn reference(&self) -> Reference {
+        Reference {
+            value: self.integral,
+            stderr: 0.0,
+        }
+    }
+    fn fourier(&self, k: &[i64]) -> Option<Complex64> {
+        if k[0] == 0 && k[1] == 0 {
+            return Some(Complex64::new(self.integral, 0.0));
+        }
+        Some(self.fourier_refined(k2(k), 1))
+    }
+    fn fourier_error(&self) -> f64 {
+        FAN_FOURIER_ERROR
+    }
+    fn mean_square(&self) -> Option<f64> {
+        Some(self.square)
+    }
+    /// Offset `c` uniform over the range where the fan crosses the square.
+    fn placed(&self, rng: &mut Rng) -> Option<Box<dyn Integrand>> {
+        let (lo, hi) = (self.s0.min(0.0), 1.0 + self.s1.max(0.0));
+        let mut c = lo + (hi - lo) * rng.random::<f64>();
+        if c <= lo {
+            c = 0.5 * (lo + hi);
+        }
+        Fan::new(self.s0, self.s1, Some(c))
+            .ok()
+            .map(|f| Box::new(f) as Box<dyn Integrand>)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Midpoint rule over an `m × m` grid.
+    fn grid_integral(f: &dyn Integrand, m: usize, g: impl Fn(f64) -> f64) -> f64 {
+        let h = 1.0 / m as f64;
+        let mut s = 0.0;
+        for i in 0..m {
+            for j in 0..m {
+                s += g(f.eval(&[(j as f64 + 0.5) * h, (i as f64 + 0.5) * h]));
+            }
+        }
+        s * h * h
+    }
+
+    #[test]
+    fn gaussian_integral_spectrum_and_parseval() {
+        let g = Gaussian::new(0.2, [0.3, 0.9]).unwrap();
+        // Smooth periodic: the midpoint rule is spectrally accurate.
+        assert!((grid_integral(&g, 200, |v| v) - g.reference().value).abs() < 1e-13);
+        assert!((grid_integral(&g, 200, |v| v * v) - g.mean_square().unwrap()).abs() < 1e-13);
+        // f̂ by the same rule.
+        let m = 200;
+        let h = 1.0 / m as f64;
+        for k in [[1i64, 0], [2, -1], [3, 3]] {
+            let mut s = Complex64::new(0.0, 0.0);
+            for i in 0..m {
+                for j in 0..m {
+                    let x = [(j as f64 + 0.5) * h, (i as f64 + 0.5) * h];
+                    s += phase(k, x) * g.eval(&x);
+                }
+            }
+            assert!((s * h * h - g.fourier(&k).unwrap()).norm() < 1e-13);
+        }
+        // Both branches of the theta sum agree near the switch.
+        let (a, b) = (Gaussian::new(0.2499, [0.5; 2]).unwrap(), Gaussian::new(0.25, [0.5; 2]).unwrap());
+        assert!((a.theta_sum() - b.theta_sum()).abs() < 1e-3);
+    }
+
+    #[test]
+    fn disc_spectrum_sums_to_its_variance() {
+        let d = Disc::new(0.3, [0.45, 0.5]).unwrap();
+        let mut s = 0.0;
+        let kmax = 400i64;
+        for k1 in -kmax..=kmax {
+            for k2 in -kmax..=kmax {
+                if (k1, k2) != (0, 0) {
+                    s += d.fourier(&[k1, k2]).unwrap().norm_sqr();
+                }
+            }
+        }
+        let var = d.mean_square().unwrap() - d.reference().value.powi(2);
+        // Tail beyond |k| = 400: Σ |f̂|² ≈ ∫_{400}^∞ (r/(π² k³)) 2πk dk ≈ 2r/(π·400) ≈ 4.8e-4.
+        assert!(var - s > 0.0 && var - s < 6e-4, "{var} vs {s}");
+    }
+
+    #[test]
+    fn step_integral_and_spectrum() {
+        let h = HalfPlane::oriented(30.0, None).unwrap();
+        assert!((h.reference().value - 0.5).abs() < 1e-15);
+        let aligned = HalfPlane::oriented(0.0, Some(0.3)).unwrap();
+        assert!((aligned.reference().value - 0.3).abs() < 1e-15);
+        assert!(aligned.fourier(&[0, 3]).unwrap().norm() < 1e-16);
+        assert!(HalfPlane::sheared(0.5, Some(2.0)).is_err());
+    }
+
+    #[test]
+    fn fan_matches_mean_of_steps() {
+        let fan = Fan::new(0.3, 0.7, None).unwrap();
+        // ∫f = mean over s of the step areas.
+        let rule = quad::gauss_legendre(16);
+        let mean_area: f64 = quad::integrate(&rule, 0.3, 0.7, &[fan.c, fan.c - 1.0], 8, |s| {
+            polygon::area(&polygon::clip_square([1.0, s], fan.c))
+        }) / 0.4;
+        assert!((fan.reference().value - mean_area).abs() < 1e-14);
+        assert!((grid_integral(&fan, 1000, |v| v) - mean_area).abs() < 2e-4);
+        assert!((grid_integral(&fan, 1000, |v| v * v) - fan.mean_square().unwrap()).abs() < 2e-4);
+        // Quadrature error of f̂: against four times the panels, over a grid of frequencies.
+        let mut worst: f64 = 0.0;
+        for k1 in -24i64..=24 {
+            for k2 in -24i64..=24 {
+                let a = fan.fourier_refined([k1, k2], 1);
+                let b = fan.fourier_refined([k1, k2], 4);
+                worst = worst.max((a - b).norm());
+            }
+        }
+        assert!(worst < FAN_FOURIER_ERROR, "fan f̂ quadrature error {worst:e}");
+        // Parseval: Σ|f̂|² ≤ ∫f² − (∫f)².
+        let mut s = 0.0;
+        for k1 in -24i64..=24 {
+            for k2 in -24i64..=24 {
+                if (k1, k2) != (0, 0) {
+                    s += fan.fourier(&[k1, k2]).unwrap().norm_sqr();
+                }
+            }
+        }
+        let var = fan.mean_square().unwrap() - fan.reference().value.powi(2);
+        assert!(s < var && s > 0.9 * var, "{s} vs {var}");
+    }
+
+    #[test]
+    fn bad_parameters_are_usage_errors() {
+        assert_eq!(Gaussian::new(-0.1, [0.5; 2]).unwrap_err().exit_code(), 2);
+        assert_eq!(Disc::new(0.3, [0.2, 0.5]).unwrap_err().exit_code(), 2);
+        assert_eq!(Fan::new(0.7, 0.3, None).unwrap_err().exit_code(), 2);
+    }
+}

@@ -1,0 +1,190 @@
+//! Log-log line plots written as PNG: several series, each with a label and optional error bars, axis
+//! labels, a title and a legend. Text is drawn with DejaVu Sans embedded in the binary (plotters'
+//! `ab_glyph` backend), so no system font is needed.
+
+use crate::error::{Error, Result};
+use plotters::prelude::*;
+use std::path::Path;
+use std::sync::Once;
+
+/// One line of a plot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Series {
+    /// Legend text, e.g. `jittered: slope -1.51 [-1.55, -1.47]`.
+    pub label: String,
+    /// `(x, y)` points, both positive (points that are not are skipped).
+    pub points: Vec<(f64, f64)>,
+    /// Optional symmetric error bars (`y ± e`), one per point.
+    pub errors: Option<Vec<f64>>,
+    /// Draw dashed, without markers (for reference lines such as `N^-1`).
+    pub dashed: bool,
+}
+
+/// A log-log plot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LogLogPlot {
+    /// Title above the plot.
+    pub title: String,
+    /// Label of the horizontal axis.
+    pub x_label: String,
+    /// Label of the vertical axis.
+    pub y_label: String,
+    /// The lines, drawn in order, coloured from a fixed palette.
+    pub series: Vec<Series>,
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+}
+
+static FONT: Once = Once::new();
+
+fn register_font() {
+    FONT.call_once(|| {
+        // The embedded font is valid; a failure here would only lose text, never the plot.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    });
+}
+
+fn plot_error(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::Numerical(format!("cannot draw the plot {}: {e}", path.display()))
+}
+
+/// The axis range `[lo, hi]` padded by a fraction of a decade on each side.
+fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    if !lo.is_finite() {
+        return None;
+    }
+    let (lo, hi) = if hi > lo { (lo, hi) } else { (lo / 2.0, hi * 2.0) };
+    let pad = ((hi / lo).log10() * 0.05).max(0.05);
+    Some((lo / 10f64.powf(pad), hi * 10f64.powf(pad)))
+}
+
+/// Draws `plot` and writes it to `path` as an RGB PNG (atomically).
+pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
+    register_font();
+    let keep = |&(x, y): &(f64, f64)| x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite();
+    let xs = plot.series.iter().flat_map(|s| s.points.iter().filter(|p| keep(p)).map(|p| p.0));
+    let ys = plot.series.iter().flat_map(|s| {
+        let errs = s.errors.clone().unwrap_or_default();
+        s.points.iter().enumerate().filter(|(_, p)| keep(p)).flat_map(move |(i, p)| {
+            let e = errs.get(i).copied().unwrap_or(0.0);
+            [p.1, p.1 + e, if p.1 - e > 0.0 { p.1 - e } else { p.1 }]
+        })
+    });
+    let (Some((x0, x1)), Some((y0, y1))) = (log_range(xs), log_range(ys)) else {
+        return Err(Error::Numerical(format!(
+            "nothing to plot in {}: no series has a positive point",
+            path.display()
+        )));
+    };
+    let (w, h) = (plot.width as usize, plot.height as usize);
+    let mut buffer = vec![0u8; w * h * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut buffer, (plot.width, plot.height)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_error(path, e))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(&plot.title, ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+            .map_err(|e| plot_error(path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc(&plot.x_label)
+            .y_desc(&plot.y_label)
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .x_label_formatter(&|v| format!("{v}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()
+            .map_err(|e| plot_error(path, e))?;
+        for (i, s) in plot.series.iter().enumerate() {
+            let colour = Palette99::pick(i).to_rgba();
+            let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(keep).collect();
+            let style = colour.stroke_width(2);
+            if s.dashed {
+                chart
+                    .draw_series(DashedLineSeries::new(pts.clone(), 8, 6, style))
+                    .map_err(|e| plot_error(path, e))?
+                    .label(&s.label)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+            } else {
+                chart
+                    .draw_series(LineSeries::new(pts.clone(), style))
+                    .map_err(|e| plot_error(path, e))?
+                    .label(&s.label)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+                chart
+                    .draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled())))
+                    .map_err(|e| plot_error(path, e))?;
+            }
+            if let Some(errs) = &s.errors {
+                let bars = s.points.iter().zip(errs).filter(|(p, _)| keep(p)).map(|(&(x, y), &e)| {
+                    let lo = if y - e > 0.0 { y - e } else { y0 };
+                    PathElement::new(vec![(x, lo), (x, y + e)], colour.stroke_width(1))
+                });
+                chart.draw_series(bars).map_err(|e| plot_error(path, e))?;
+            }
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerLeft)
+            .label_font(("sans-serif", 14))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| plot_error(path, e))?;
+        root.present().map_err(|e| plot_error(path, e))?;
+    }
+    super::image::write_png(path, w, h, 3, &buffer)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn draws_lines_text_and_error_bars() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.png");
+        let plot = LogLogPlot {
+            title: "test".into(),
+            x_label: "N".into(),
+            y_label: "MSE".into(),
+            series: vec![
+                Series {
+                    label: "a: slope -1".into(),
+                    points: vec![(16.0, 1e-2), (64.0, 2.5e-3), (256.0, 6e-4)],
+                    errors: Some(vec![1e-3, 2e-4, 1e-4]),
+                    dashed: false,
+                },
+                Series {
+                    label: "N^-2".into(),
+                    points: vec![(16.0, 1e-3), (256.0, 4e-6)],
+                    errors: None,
+                    dashed: true,
+                },
+            ],
+            width: 640,
+            height: 480,
+        };
+        write_loglog_png(&path, &plot).unwrap();
+        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
+        let mut reader = decoder.read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        assert_eq!((info.width, info.height), (640, 480));
+        // Not blank: many non-white pixels, and several colours (lines, text).
+        let non_white = buf.chunks(3).filter(|p| p != &[255, 255, 255]).count();
+        assert!(non_white > 5000, "{non_white}");
+        // The title row area holds dark text pixels (the embedded font renders).
+        let dark_in_title = buf[..640 * 3 * 30].chunks(3).filter(|p| p[0] < 100 && p[1] < 100 && p[2] < 100).count();
+        assert!(dark_in_title > 20, "{dark_in_title}");
+        assert!(write_loglog_png(&path, &LogLogPlot { series: vec![], ..plot }).is_err());
+    }
+}

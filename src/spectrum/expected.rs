@@ -1,0 +1,139 @@
+//! Expected power spectra: the mean of `P(k)` over independent realizations, with its standard error
+//! (DESIGN §3).
+
+use super::{check_res, power, Method};
+use crate::error::{Error, Result};
+use crate::points::{project, PointSets, Projection};
+use crate::progress;
+use crate::rng;
+use crate::samplers::{validate_n, Sampler};
+use rayon::prelude::*;
+
+/// The mean spectrum over `realizations` sets of `n` points on a `res × res` grid, and its standard
+/// error (grid layout: see [`crate::spectrum`]).
+#[derive(Clone, Debug)]
+pub struct ExpectedSpectrum {
+    /// Grid side `K`.
+    pub res: usize,
+    /// Points per set.
+    pub n: usize,
+    /// Number of realizations averaged.
+    pub realizations: usize,
+    /// `E[P(k)]`, `K²` values.
+    pub mean: Vec<f64>,
+    /// Standard error of `mean` per bin (`sqrt(sample variance / R)`); all zero when `R = 1`, where it is
+    /// unknown — check `realizations`.
+    pub stderr: Vec<f64>,
+}
+
+/// Realizations summed sequentially inside one parallel task: the summation order, hence the bits, do
+/// not depend on the thread count.
+const CHUNK: usize = 4;
+/// Chunks held in memory at once.
+const CHUNKS_PER_BATCH: usize = 16;
+
+/// Averages the spectra of `realizations` projected point sets, `draw(r)` giving realization `r`.
+pub fn expected_spectrum<F>(
+    realizations: usize,
+    res: usize,
+    method: Method,
+    label: &str,
+    draw: F,
+) -> Result<ExpectedSpectrum>
+where
+    F: Fn(usize) -> Vec<[f64; 2]> + Sync,
+{
+    check_res(res)?;
+    if realizations == 0 {
+        return Err(Error::Usage(
+            "--realizations 0 averages nothing; give at least 1 (2 or more for standard errors)"
+                .into(),
+        ));
+    }
+    let bins = res * res;
+    let bar = progress::bar(realizations as u64, label);
+    let mut sum = vec![0.0; bins];
+    let mut sum_sq = vec![0.0; bins];
+    let mut n = 0;
+    let batch = CHUNK * CHUNKS_PER_BATCH;
+    for start in (0..realizations).step_by(batch) {
+        let end = (start + batch).min(realizations);
+        let partial: Vec<(Vec<f64>, Vec<f64>, usize)> = (start..end)
+            .step_by(CHUNK)
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|c0| {
+                let mut s = vec![0.0; bins];
+                let mut s2 = vec![0.0; bins];
+                let mut count = 0;
+                for r in c0..(c0 + CHUNK).min(end) {
+                    let pts = draw(r);
+                    count = pts.len();
+                    for ((a, b), p) in s.iter_mut().zip(&mut s2).zip(power(&pts, res, method)) {
+                        *a += p;
+                        *b += p * p;
+                    }
+                    bar.inc(1);
+                }
+                (s, s2, count)
+            })
+            .collect();
+        for (s, s2, count) in partial {
+            n = count;
+            sum.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
+            sum_sq.iter_mut().zip(&s2).for_each(|(a, b)| *a += b);
+        }
+    }
+    bar.finish_and_clear();
+    let r = realizations as f64;
+    let mean: Vec<f64> = sum.iter().map(|s| s / r).collect();
+    let stderr = if realizations < 2 {
+        vec![0.0; bins]
+    } else {
+        mean.iter()
+            .zip(&sum_sq)
+            .map(|(m, s2)| ((s2 / r - m * m).max(0.0) * r / (r - 1.0) / r).sqrt())
+            .collect()
+    };
+    Ok(ExpectedSpectrum {
+        res,
+        n,
+        realizations,
+        mean,
+        stderr,
+    })
+}
+
+/// The expected spectrum of `sampler` in projection `proj`: realization `r` is set `r` of `seed`
+/// (the same sets as `anisospec sample` with that seed).
+pub fn of_sampler(
+    sampler: &dyn Sampler,
+    n: usize,
+    proj: Projection,
+    res: usize,
+    realizations: usize,
+    seed: u64,
+    method: Method,
+) -> Result<ExpectedSpectrum> {
+    validate_n(sampler, n)?;
+    let dims = sampler.dims();
+    expected_spectrum(realizations, res, method, &sampler.name(), |r| {
+        project(
+            &sampler.generate(n, &mut rng::stream(seed, r as u64)),
+            dims,
+            proj,
+        )
+    })
+}
+
+/// The expected spectrum over every set of a stored point set.
+pub fn of_sets(
+    sets: &PointSets,
+    proj: Projection,
+    res: usize,
+    method: Method,
+) -> Result<ExpectedSpectrum> {
+    expected_spectrum(sets.sets(), res, method, "point sets", |r| {
+        sets.project(r, proj)
+    })
+}

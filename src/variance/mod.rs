@@ -1,0 +1,298 @@
+//! Variance in the Fourier domain (DESIGN §4): with a random toroidal shift,
+//! `Var(I_N) = (1/N) Σ_{k≠0} |f̂(k)|² E[P_N(k)]`, split by directional cone, with the part of the sum
+//! beyond the frequency grid estimated by Parseval, and the predicted slope.
+//!
+//! The expectation is taken over `R` realizations of the sampler, and the prediction's standard error is
+//! that of the per-realization sums `V_r = (1/N) Σ_k |f̂(k)|² P_r(k)`, which accounts for the
+//! correlation between frequencies exactly.
+//!
+//! Only the 2D spectra of the projections that carry `f̂` are needed ([`Integrand::spectral_planes`]);
+//! a frequency shared by two planes (a common axis) is counted once.
+
+use crate::converge::{check_plan, fit_power_law, SlopeFit};
+use crate::error::{Error, Result};
+use crate::integrands::Integrand;
+use crate::points::{project, Projection};
+use crate::rng;
+use crate::samplers::Sampler;
+use crate::spectrum::profiles::cone_index;
+use crate::spectrum::{check_res, fourier_sums, Method};
+use rayon::prelude::*;
+use rustfft::num_complex::Complex64;
+use std::f64::consts::TAU;
+
+/// How to predict.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VarianceConfig {
+    /// Frequency grid `K` (even): `k1, k2 ∈ {−K/2 … K/2−1}` in each plane.
+    pub res: usize,
+    /// Realizations of the sampler over which `E[P]` is averaged (at least 2).
+    pub realizations: usize,
+    /// Number of directional cones (cone `c` centred on `c·180°/cones`; cone 0 holds the `k1` axis).
+    pub cones: usize,
+    /// Seed of the sampler's realizations.
+    pub seed: u64,
+    /// How full-grid Fourier sums are computed (sparse spectra are summed exactly at their frequencies).
+    pub method: Method,
+}
+
+/// The prediction at one `N`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VariancePoint {
+    /// Points per set.
+    pub n: usize,
+    /// Predicted variance: `grid + tail`.
+    pub variance: f64,
+    /// Standard error of `variance` (from the realizations; the tail is taken as exact).
+    pub stderr: f64,
+    /// The sum over the frequency grid.
+    pub grid: f64,
+    /// The part beyond the grid (and below the `|f̂|²` threshold), estimated as
+    /// `(Var(f) − Σ_grid |f̂|²) / N`: white noise (`E[P] = 1`) there. `None` when `∫f²` is unknown.
+    pub tail: Option<f64>,
+    /// The grid sum split by directional cone (sums to `grid`).
+    pub cones: Vec<f64>,
+    /// Standard error of each cone's share.
+    pub cone_stderr: Vec<f64>,
+}
+
+/// Predictions for a list of `N`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VariancePrediction {
+    /// Sampler name.
+    pub sampler: String,
+    /// Integrand name.
+    pub integrand: String,
+    /// The projections summed over.
+    pub planes: Vec<Projection>,
+    /// One entry per `N`.
+    pub points: Vec<VariancePoint>,
+    /// Predicted `Var ∝ N^slope` over all `N` (`None` with fewer than two `N`).
+    pub fit: Option<SlopeFit>,
+    /// Slope of each cone's share (`None` where a share is zero).
+    pub cone_fits: Vec<Option<SlopeFit>>,
+}
+
+/// Frequencies with non-negligible `|f̂|²`, grouped by plane.
+struct Spectrum {
+    planes: Vec<Projection>,
+    /// Per plane: `(grid index i·K + j, |f̂|², cone)`.
+    active: Vec<Vec<(usize, f64, usize)>>,
+    /// `Σ |f̂|²` over all active frequencies.
+    total: f64,
+}
+
+/// Frequencies below this fraction of the largest `|f̂|²` are left to the tail.
+const NEGLIGIBLE: f64 = 1e-20;
+
+fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spectrum> {
+    let planes = f.spectral_planes().ok_or_else(|| {
+        Error::Usage(format!(
+            "the spectrum of {} spreads over all {}D frequencies (a product over two projections); the Fourier prediction needs it on 2D projections (single integrands or sums of @proj terms); measure it with `anisospec converge` instead",
+            f.name(),
+            f.dims()
+        ))
+    })?;
+    let half = (res / 2) as i64;
+    let dims = f.dims();
+    let mut active = Vec::with_capacity(planes.len());
+    let mut max_w: f64 = 0.0;
+    for (pi, p) in planes.iter().enumerate() {
+        let list: Vec<(usize, f64, usize)> = (0..res * res)
+            .into_par_iter()
+            .filter_map(|idx| {
+                let (k1, k2) = ((idx % res) as i64 - half, (idx / res) as i64 - half);
+                if k1 == 0 && k2 == 0 {
+                    return None;
+                }
+                let mut k = vec![0i64; dims];
+                k[p.a] = k1;
+                k[p.b] = k2;
+                // Counted already in an earlier plane that also contains this frequency.
+                let nonzero: Vec<usize> = (0..dims).filter(|&d| k[d] != 0).collect();
+                if planes[..pi].iter().any(|q| nonzero.iter().all(|&d| d == q.a || d == q.b)) {
+                    return None;
+                }
+                let w = f.fourier(&k).map(|c| c.norm_sqr());
+                Some(w.map(|w| (idx, w, cone_index(k1, k2, cones))))
+            })
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(|| {
+                Error::Usage(format!(
+                    "{} has no Fourier coefficients; the prediction needs them (measure it with `anisospec converge`)",
+                    f.name()
+                ))
+            })?;
+        max_w = list.iter().fold(max_w, |m, e| m.max(e.1));
+        active.push(list);
+    }
+    for list in &mut active {
+        list.retain(|e| e.1 > NEGLIGIBLE * max_w);
+    }
+    let total = active.iter().flatten().map(|e| e.1).sum();
+    Ok(Spectrum { planes, active, total })
+}
+
+/// `exp(−2πi k c)` for each `k` of `ks`, argument reduced mod 1.
+fn phases(c: f64, ks: &[i64]) -> Vec<Complex64> {
+    ks.iter()
+        .map(|&k| {
+            let t = (k as f64 * c).rem_euclid(1.0);
+            let (s, co) = (TAU * t).sin_cos();
+            Complex64::new(co, -s)
+        })
+        .collect()
+}
+
+/// `|F(k)|² / N` at the active frequencies of one plane: the full-grid sums when most of the grid is
+/// active, else exact sums at the active frequencies only.
+fn power_at(points: &[[f64; 2]], res: usize, active: &[(usize, f64, usize)], method: Method) -> Vec<f64> {
+    let n = points.len() as f64;
+    if active.len() * 4 > res * res {
+        let sums = fourier_sums(points, res, method);
+        return active.iter().map(|e| sums[e.0].norm_sqr() / n).collect();
+    }
+    // Distinct columns and rows used, and each active frequency's position among them.
+    let half = (res / 2) as i64;
+    let mut col = vec![usize::MAX; res];
+    let mut row = vec![usize::MAX; res];
+    let (mut k1s, mut k2s) = (Vec::new(), Vec::new());
+    for e in active {
+        let (j, i) = (e.0 % res, e.0 / res);
+        if col[j] == usize::MAX {
+            col[j] = k1s.len();
+            k1s.push(j as i64 - half);
+        }
+        if row[i] == usize::MAX {
+            row[i] = k2s.len();
+            k2s.push(i as i64 - half);
+        }
+    }
+    let at: Vec<(usize, usize)> = active.iter().map(|e| (col[e.0 % res], row[e.0 / res])).collect();
+    let mut sums = vec![Complex64::new(0.0, 0.0); active.len()];
+    for p in points {
+        let (e1, e2) = (phases(p[0], &k1s), phases(p[1], &k2s));
+        for (s, &(a, b)) in sums.iter_mut().zip(&at) {
+            *s += e1[a] * e2[b];
+        }
+    }
+    sums.iter().map(|s| s.norm_sqr() / n).collect()
+}
+
+fn check_config(cfg: &VarianceConfig) -> Result<()> {
+    check_res(cfg.res)?;
+    if cfg.cones == 0 {
+        return Err(Error::Usage("--cones 0: use at least one cone (1 = no split)".into()));
+    }
+    Ok(())
+}
+
+/// Per-realization `(V_r, V_r per cone)` at size `n`.
+fn realizations(sampler: &dyn Sampler, spec: &Spectrum, n: usize, cfg: &VarianceConfig) -> Vec<(f64, Vec<f64>)> {
+    (0..cfg.realizations)
+        .into_par_iter()
+        .map(|r| {
+            let set = sampler.generate(n, &mut rng::substream(cfg.seed, r as u64, n as u64));
+            let mut cones = vec![0.0; cfg.cones];
+            for (p, active) in spec.planes.iter().zip(&spec.active) {
+                if active.is_empty() {
+                    continue;
+                }
+                let pts = project(&set, sampler.dims(), *p);
+                let power = power_at(&pts, cfg.res, active, cfg.method);
+                for (e, pk) in active.iter().zip(power) {
+                    cones[e.2] += e.1 * pk / n as f64;
+                }
+            }
+            (cones.iter().sum(), cones)
+        })
+        .collect()
+}
+
+fn mean_se(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
+    let r = v.clone().count() as f64;
+    let m = v.clone().sum::<f64>() / r;
+    let var = v.map(|x| (x - m).powi(2)).sum::<f64>() / (r - 1.0);
+    (m, (var / r).sqrt())
+}
+
+/// Predicts the variance of `sampler` on `f` for every `N` of `ns`.
+pub fn predict(sampler: &dyn Sampler, f: &dyn Integrand, ns: &[usize], cfg: &VarianceConfig) -> Result<VariancePrediction> {
+    check_plan(sampler, f, ns, cfg.realizations)?;
+    check_config(cfg)?;
+    let spec = integrand_spectrum(f, cfg.res, cfg.cones)?;
+    let var_f = f.mean_square().map(|m| m - f.reference().value.powi(2));
+    let mut points = Vec::with_capacity(ns.len());
+    for &n in ns {
+        let per = realizations(sampler, &spec, n, cfg);
+        let (grid, stderr) = mean_se(per.iter().map(|p| p.0));
+        let mut cones = Vec::with_capacity(cfg.cones);
+        let mut cone_stderr = Vec::with_capacity(cfg.cones);
+        for c in 0..cfg.cones {
+            let (m, s) = mean_se(per.iter().map(|p| p.1[c]));
+            cones.push(m);
+            cone_stderr.push(s);
+        }
+        let tail = var_f.map(|v| (v - spec.total).max(0.0) / n as f64);
+        points.push(VariancePoint {
+            n,
+            variance: grid + tail.unwrap_or(0.0),
+            stderr,
+            grid,
+            tail,
+            cones,
+            cone_stderr,
+        });
+    }
+    let nf: Vec<f64> = ns.iter().map(|&n| n as f64).collect();
+    let fit = {
+        let v: Vec<f64> = points.iter().map(|p| p.variance).collect();
+        let se: Vec<f64> = points.iter().map(|p| p.stderr).collect();
+        fit_power_law(&nf, &v, &se).ok()
+    };
+    let cone_fits = (0..cfg.cones)
+        .map(|c| {
+            let v: Vec<f64> = points.iter().map(|p| p.cones[c]).collect();
+            let se: Vec<f64> = points.iter().map(|p| p.cone_stderr[c]).collect();
+            fit_power_law(&nf, &v, &se).ok()
+        })
+        .collect();
+    Ok(VariancePrediction {
+        sampler: sampler.name(),
+        integrand: f.name(),
+        planes: spec.planes,
+        points,
+        fit,
+        cone_fits,
+    })
+}
+
+/// Writes a prediction as CSV (atomically): `n, variance, stderr, grid, tail`, then `cone_c` and
+/// `cone_c_stderr` for every cone; an unknown tail is left empty.
+pub fn write_csv(path: &std::path::Path, pred: &VariancePrediction) -> Result<()> {
+    use std::io::Write;
+    let cones = pred.points.first().map_or(0, |p| p.cones.len());
+    crate::output::write_atomic(path, |w| {
+        let mut header = vec!["n".to_string(), "variance".into(), "stderr".into(), "grid".into(), "tail".into()];
+        for c in 0..cones {
+            header.push(format!("cone_{c}"));
+            header.push(format!("cone_{c}_stderr"));
+        }
+        writeln!(w, "{}", header.join(","))?;
+        for p in &pred.points {
+            let mut row = vec![
+                p.n.to_string(),
+                format!("{:e}", p.variance),
+                format!("{:e}", p.stderr),
+                format!("{:e}", p.grid),
+                p.tail.map_or(String::new(), |t| format!("{t:e}")),
+            ];
+            for c in 0..cones {
+                row.push(format!("{:e}", p.cones[c]));
+                row.push(format!("{:e}", p.cone_stderr[c]));
+            }
+            writeln!(w, "{}", row.join(","))?;
+        }
+        Ok(())
+    })
+}

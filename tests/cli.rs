@@ -1,0 +1,251 @@
+//! The command line: a round trip through files, and bad input (exit code 2, a clear message, no output
+//! file, inputs untouched).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn anisospec(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_anisospec"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn tmp(name: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    (dir, path)
+}
+
+/// Runs `args`, expects exit code 2 with a message containing `needle`, and no file at `out`.
+fn rejects(args: &[&str], needle: &str, out: &Path) {
+    let o = anisospec(args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{args:?} exited {:?}: {err}",
+        o.status.code()
+    );
+    assert!(
+        err.to_lowercase().contains(&needle.to_lowercase()),
+        "{args:?}: '{err}' lacks '{needle}'"
+    );
+    assert!(!out.exists(), "{args:?} left {}", out.display());
+}
+
+#[test]
+fn sample_then_spectrum_round_trip() {
+    let (dir, pts) = tmp("mj.npy");
+    let o = anisospec(&[
+        "sample",
+        "--sampler",
+        "mj",
+        "-n",
+        "64",
+        "--sets",
+        "8",
+        "--seed",
+        "3",
+        "-o",
+        pts.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let txt = dir.path().join("mj.txt");
+    let o = anisospec(&[
+        "sample",
+        "--sampler",
+        "mj",
+        "-n",
+        "64",
+        "--sets",
+        "8",
+        "--seed",
+        "3",
+        "-o",
+        txt.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    let a = anisospec::points::io::read_points(&pts).unwrap();
+    let b = anisospec::points::io::read_points(&txt).unwrap();
+    assert_eq!(a, b, "npy and text hold the same numbers");
+    let spec = dir.path().join("s.npy");
+    let png = dir.path().join("s.png");
+    let radial = dir.path().join("r.csv");
+    let o = anisospec(&[
+        "spectrum",
+        "--input",
+        pts.to_str().unwrap(),
+        "--res",
+        "16",
+        "--exact",
+        "-o",
+        &format!("{},{}", spec.display(), png.display()),
+        "--radial",
+        radial.to_str().unwrap(),
+        "--cones",
+        "4",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(png.exists() && radial.exists());
+    let bytes = std::fs::read(&spec).unwrap();
+    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
+    assert_eq!(npy.shape(), &[16, 16]);
+    let values: Vec<f64> = npy.into_vec().unwrap();
+    // P(0) = N.
+    assert!((values[8 * 16 + 8] - 64.0).abs() < 1e-9);
+}
+
+#[test]
+fn bad_sampler_and_n_are_rejected() {
+    let (_d, out) = tmp("x.npy");
+    let o = out.to_str().unwrap();
+    rejects(
+        &["sample", "--sampler", "nosuch", "-n", "16", "-o", o],
+        "nosuch",
+        &out,
+    );
+    rejects(
+        &["sample", "--sampler", "jittered", "-n", "50", "-o", o],
+        "49",
+        &out,
+    );
+    rejects(
+        &["spectrum", "--sampler", "jittered", "-n", "50", "-o", o],
+        "49",
+        &out,
+    );
+}
+
+#[test]
+fn bad_resolution_is_rejected() {
+    let (_d, out) = tmp("x.npy");
+    let o = out.to_str().unwrap();
+    rejects(
+        &[
+            "spectrum",
+            "--sampler",
+            "random",
+            "-n",
+            "16",
+            "--res",
+            "15",
+            "-o",
+            o,
+        ],
+        "even",
+        &out,
+    );
+    rejects(
+        &[
+            "spectrum",
+            "--sampler",
+            "random",
+            "-n",
+            "16",
+            "--res",
+            "0",
+            "-o",
+            o,
+        ],
+        "even",
+        &out,
+    );
+}
+
+#[test]
+fn projection_must_fit_dimensions() {
+    let (_d, out) = tmp("x.npy");
+    let o = out.to_str().unwrap();
+    rejects(
+        &[
+            "spectrum",
+            "--sampler",
+            "random",
+            "-n",
+            "16",
+            "--proj",
+            "xu",
+            "-o",
+            o,
+        ],
+        "--proj",
+        &out,
+    );
+}
+
+#[test]
+fn bad_point_files_are_rejected_and_left_untouched() {
+    let cases: [(&str, &str, &str); 5] = [
+        ("empty.txt", "", "no points"),
+        ("garbage.txt", "0.1 0.2\n0.3 oops\n", "not a number"),
+        ("ragged.txt", "0.1 0.2\n0.3\n", "coordinates"),
+        ("nan.txt", "0.1 0.2\nNaN 0.5\n", "finite"),
+        ("range.txt", "0.1 0.2\n1.5 0.5\n", "[0, 1)"),
+    ];
+    for (name, content, needle) in cases {
+        let (dir, input) = tmp(name);
+        std::fs::write(&input, content).unwrap();
+        let out = dir.path().join("spec.npy");
+        rejects(
+            &[
+                "spectrum",
+                "--input",
+                input.to_str().unwrap(),
+                "--res",
+                "8",
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            needle,
+            &out,
+        );
+        assert_eq!(
+            std::fs::read_to_string(&input).unwrap(),
+            content,
+            "{name} was modified"
+        );
+    }
+    // A truncated npy file.
+    let (dir, input) = tmp("cut.npy");
+    std::fs::write(&input, b"\x93NUMPY\x01\x00").unwrap();
+    let out = dir.path().join("spec.npy");
+    rejects(
+        &[
+            "spectrum",
+            "--input",
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "npy",
+        &out,
+    );
+}
+
+#[test]
+fn output_never_clobbers_input() {
+    let (_dir, input) = tmp("pts.npy");
+    let o = anisospec(&[
+        "sample",
+        "--sampler",
+        "random",
+        "-n",
+        "16",
+        "-o",
+        input.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    let before = std::fs::read(&input).unwrap();
+    let o = anisospec(&[
+        "spectrum",
+        "--input",
+        input.to_str().unwrap(),
+        "--res",
+        "8",
+        "-o",
+        input.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(std::fs::read(&input).unwrap(), before);
+}

@@ -1,0 +1,369 @@
+//! Stratification, determinism and N-validation of every classical sampler.
+
+use anisospec::points::shear::ShearMode;
+use anisospec::points::PointSets;
+use anisospec::rng::stream;
+use anisospec::samplers::disk::{max_packing_radius, Poisson, DEFAULT_RELATIVE_RADIUS};
+use anisospec::samplers::grid::mj_shape;
+use anisospec::samplers::{
+    build, catalog, generate_sets, validate_n, Sampler, Sheared, NAMES_2D, NAMES_4D,
+};
+use anisospec::Error;
+
+/// A small valid N near `target` for `s`.
+fn valid_near(s: &dyn Sampler, target: usize) -> usize {
+    s.check_n(target).map_or_else(|n| n, |_| target)
+}
+
+/// Every registered name in `dims`, families expanded.
+fn all_names(dims: usize) -> Vec<String> {
+    if dims == 2 {
+        NAMES_2D.iter().map(|s| s.to_string()).collect()
+    } else {
+        let mut v: Vec<String> = NAMES_4D.iter().map(|s| s.to_string()).collect();
+        for p in ["padded", "xuyv"] {
+            v.extend(NAMES_2D.iter().map(|s| format!("{p}-{s}")));
+        }
+        v
+    }
+}
+
+/// Coordinate pairs of projection `(a, b)` of one set.
+fn proj(set: &[f64], dims: usize, a: usize, b: usize) -> Vec<(f64, f64)> {
+    set.chunks_exact(dims).map(|p| (p[a], p[b])).collect()
+}
+
+/// True if the `cols × rows` grid has exactly `per` points in every cell.
+fn stratified(pts: &[(f64, f64)], cols: usize, rows: usize) -> bool {
+    let mut counts = vec![0usize; cols * rows];
+    for &(x, y) in pts {
+        let i = ((x * cols as f64) as usize).min(cols - 1);
+        let j = ((y * rows as f64) as usize).min(rows - 1);
+        counts[j * cols + i] += 1;
+    }
+    let per = pts.len() / (cols * rows);
+    per * cols * rows == pts.len() && counts.iter().all(|&c| c == per)
+}
+
+/// One point in each of the `n` strata of every 1D projection of `(x, y)`.
+fn nrooks(pts: &[(f64, f64)]) -> bool {
+    let n = pts.len();
+    stratified(pts, n, 1) && stratified(pts, 1, n)
+}
+
+/// Every elementary interval `2^-a × 2^-(m-a)` of a `2^m`-point set holds one point.
+fn elementary(pts: &[(f64, f64)]) -> bool {
+    let n = pts.len();
+    assert!(n.is_power_of_two());
+    let m = n.trailing_zeros();
+    (0..=m).all(|a| stratified(pts, 1 << a, 1 << (m - a)))
+}
+
+fn one_set(name: &str, dims: usize, n: usize, seed: u64) -> Vec<f64> {
+    let s = build(name, dims).unwrap();
+    generate_sets(s.as_ref(), n, 1, seed)
+        .unwrap()
+        .set(0)
+        .to_vec()
+}
+
+const SEEDS: [u64; 4] = [1, 2, 77, 123_456_789];
+
+#[test]
+fn jittered_one_point_per_stratum() {
+    for &seed in &SEEDS {
+        for m in [1, 3, 8] {
+            let set = one_set("jittered", 2, m * m, seed);
+            assert!(stratified(&proj(&set, 2, 0, 1), m, m));
+            let set = one_set("jittered", 4, m.pow(4), seed);
+            // Every cell of the m^4 grid: count distinct 4D cells.
+            let mut cells: Vec<usize> = set
+                .chunks_exact(4)
+                .map(|p| {
+                    p.iter()
+                        .fold(0, |acc, &c| acc * m + (c * m as f64) as usize)
+                })
+                .collect();
+            cells.sort_unstable();
+            cells.dedup();
+            assert_eq!(cells.len(), m.pow(4));
+        }
+    }
+}
+
+#[test]
+fn nrooks_one_per_row_and_column() {
+    for &seed in &SEEDS {
+        for n in [1, 7, 100, 1000] {
+            assert!(nrooks(&proj(&one_set("nrooks", 2, n, seed), 2, 0, 1)));
+            let set = one_set("nrooks", 4, n, seed);
+            for (a, b) in [(0, 1), (2, 3)] {
+                assert!(nrooks(&proj(&set, 4, a, b)));
+            }
+        }
+    }
+}
+
+#[test]
+fn mj_and_cmj_are_nrooks_and_coarse_stratified() {
+    for name in ["mj", "cmj"] {
+        for &seed in &SEEDS {
+            for n in [16, 20, 24, 256, 1056] {
+                let (m, rows) = mj_shape(n).unwrap();
+                let pts = proj(&one_set(name, 2, n, seed), 2, 0, 1);
+                assert!(nrooks(&pts), "{name} N={n} not N-rooks");
+                assert!(stratified(&pts, m, rows), "{name} N={n} not {m}x{rows}");
+            }
+        }
+    }
+}
+
+#[test]
+fn sobol_and_pmj02_fill_every_elementary_interval() {
+    for name in ["sobol", "pmj02"] {
+        for &seed in &SEEDS {
+            // One sequence of 2^12 points: each of its power-of-two prefixes must be a (0,m,2)-net.
+            let set = one_set(name, 2, 1 << 12, seed);
+            let pts = proj(&set, 2, 0, 1);
+            for m in 0..=12 {
+                assert!(
+                    elementary(&pts[..1 << m]),
+                    "{name} seed {seed}: prefix 2^{m}"
+                );
+            }
+            // And sets generated directly at a power of two.
+            for m in [1, 5, 8] {
+                let set = one_set(name, 2, 1 << m, seed);
+                assert!(elementary(&proj(&set, 2, 0, 1)), "{name} N=2^{m}");
+            }
+        }
+    }
+    // The 4D Sobol set keeps the (0,m,2)-net in its first two dimensions.
+    let set = one_set("sobol", 4, 1024, 5);
+    assert!(elementary(&proj(&set, 4, 0, 1)));
+}
+
+#[test]
+fn pmj02_prefixes_between_powers_stay_nrooks_coarse() {
+    // A non-power-of-two prefix is still a valid set (no panic), with the 2^m prefix inside it.
+    let set = one_set("pmj02", 2, 1000, 3);
+    let pts = proj(&set, 2, 0, 1);
+    assert!(elementary(&pts[..512]));
+}
+
+#[test]
+fn oa_projections_are_stratified() {
+    for &seed in &SEEDS {
+        for p in [3usize, 5, 7, 11] {
+            let n = p * p;
+            let set = one_set("oa", 4, n, seed);
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    let pts = proj(&set, 4, a, b);
+                    assert!(stratified(&pts, p, p), "oa N={n} dims {a}{b} not {p}x{p}");
+                    assert!(nrooks(&pts), "oa N={n} dims {a}{b} not N-stratified in 1D");
+                }
+            }
+        }
+    }
+}
+
+/// What each 2D sampler promises about its own (first, second) projection at `n`.
+fn promise_2d(name: &str, pts: &[(f64, f64)]) {
+    let n = pts.len();
+    match name {
+        "jittered" => {
+            let m = (n as f64).sqrt().round() as usize;
+            assert!(stratified(pts, m, m), "{name}");
+        }
+        "nrooks" => assert!(nrooks(pts), "{name}"),
+        "mj" | "cmj" => {
+            let (m, rows) = mj_shape(n).unwrap();
+            assert!(nrooks(pts) && stratified(pts, m, rows), "{name}");
+        }
+        "sobol" | "pmj02" if n.is_power_of_two() => assert!(elementary(pts), "{name}"),
+        _ => {}
+    }
+}
+
+#[test]
+fn xuyv_and_padded_carry_the_inner_stratification() {
+    for inner in ["jittered", "nrooks", "mj", "cmj", "sobol", "pmj02"] {
+        for &seed in &SEEDS[..2] {
+            let n = 256;
+            let xuyv = one_set(&format!("xuyv-{inner}"), 4, n, seed);
+            promise_2d(inner, &proj(&xuyv, 4, 0, 2));
+            promise_2d(inner, &proj(&xuyv, 4, 1, 3));
+            let padded = one_set(&format!("padded-{inner}"), 4, n, seed);
+            promise_2d(inner, &proj(&padded, 4, 0, 1));
+            promise_2d(inner, &proj(&padded, 4, 2, 3));
+        }
+    }
+    // The xu projection of padded jittered is not jittered (DESIGN §2 note): a 16x16 jittered xu
+    // projection would need every one of 256 cells filled; independent x and u leave many empty.
+    let padded = one_set("padded-jittered", 4, 256, 9);
+    assert!(!stratified(&proj(&padded, 4, 0, 2), 16, 16));
+}
+
+#[test]
+fn every_sampler_is_in_range_deterministic_and_seed_dependent() {
+    for dims in [2, 4] {
+        for name in all_names(dims) {
+            let s = build(&name, dims).unwrap();
+            assert_eq!(s.dims(), dims);
+            let n = valid_near(s.as_ref(), if name.ends_with("blue") { 64 } else { 100 });
+            let run = |threads: usize, seed: u64| -> PointSets {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| generate_sets(s.as_ref(), n, 3, seed).unwrap())
+            };
+            let a = run(1, 42);
+            let b = run(2, 42);
+            assert_eq!((a.sets(), a.n(), a.dims()), (3, n, dims), "{name}");
+            assert!(
+                a.data()
+                    .iter()
+                    .all(|c| c.is_finite() && (0.0..1.0).contains(c)),
+                "{name}: coordinate out of [0,1)"
+            );
+            let bits = |p: &PointSets| p.data().iter().map(|c| c.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a), bits(&b), "{name}: thread count changed the bits");
+            assert_ne!(a.set(0), a.set(1), "{name}: two sets of one run are equal");
+            let c = run(1, 43);
+            assert_ne!(
+                a.data(),
+                c.data(),
+                "{name}: seeds 42 and 43 gave the same sets"
+            );
+        }
+    }
+}
+
+#[test]
+fn check_n_names_the_nearest_valid_n() {
+    let cases: [(&str, usize, usize, usize); 9] = [
+        ("jittered", 2, 50, 49),
+        ("jittered", 2, 60, 64),
+        ("jittered", 4, 100, 81),
+        ("jittered", 4, 200, 256),
+        ("oa", 4, 50, 49),
+        ("oa", 4, 16, 9),
+        ("mj", 2, 17, 16),
+        ("padded-jittered", 4, 50, 49),
+        ("sobol", 2, 70_000, 65_536),
+    ];
+    for (name, dims, n, nearest) in cases {
+        let s = build(name, dims).unwrap();
+        assert_eq!(s.check_n(n), Err(nearest), "{name} {dims}D N={n}");
+        assert_eq!(s.check_n(nearest), Ok(()), "{name} {dims}D N={nearest}");
+        let msg = validate_n(s.as_ref(), n).unwrap_err().to_string();
+        assert!(msg.contains(&nearest.to_string()), "{msg}");
+    }
+    for name in ["random", "nrooks", "halton", "pmj02", "poisson", "blue"] {
+        assert_eq!(build(name, 2).unwrap().check_n(123), Ok(()), "{name}");
+    }
+    assert!(matches!(
+        validate_n(build("random", 2).unwrap().as_ref(), 0),
+        Err(Error::Usage(_))
+    ));
+}
+
+#[test]
+fn poisson_keeps_the_requested_radius() {
+    let sampler = Poisson::default();
+    for &seed in &SEEDS {
+        for n in [64, 500] {
+            let set = sampler.try_generate(n, &mut stream(seed, 0)).unwrap();
+            let r = DEFAULT_RELATIVE_RADIUS * max_packing_radius(n);
+            let pts = proj(&set, 2, 0, 1);
+            let mut min_d2 = f64::INFINITY;
+            for i in 0..n {
+                for j in 0..i {
+                    let d = |a: f64, b: f64| {
+                        let t = (a - b).abs();
+                        t.min(1.0 - t)
+                    };
+                    let dx = d(pts[i].0, pts[j].0);
+                    let dy = d(pts[i].1, pts[j].1);
+                    min_d2 = min_d2.min(dx * dx + dy * dy);
+                }
+            }
+            assert!(
+                min_d2.sqrt() >= r,
+                "N={n}: min distance {} < {r}",
+                min_d2.sqrt()
+            );
+            // The fallible path and the trait path agree when the first radius suffices.
+            assert_eq!(set, sampler.generate(n, &mut stream(seed, 0)));
+        }
+    }
+    // An unreachable radius is reported, not looped on.
+    let tight = Poisson::new(0.99).unwrap();
+    assert!(matches!(
+        tight.try_generate(200, &mut stream(1, 0)),
+        Err(Error::Numerical(_))
+    ));
+    assert!(Poisson::new(0.0).is_err() && Poisson::new(1.5).is_err());
+}
+
+#[test]
+fn registry_lists_and_rejects_helpfully() {
+    let cat = catalog();
+    for name in NAMES_2D {
+        assert!(
+            cat.iter().any(|i| i.name == name && i.dims.contains(&2)),
+            "{name}"
+        );
+    }
+    for name in NAMES_4D {
+        assert!(
+            cat.iter().any(|i| i.name == name && i.dims.contains(&4)),
+            "{name}"
+        );
+    }
+    let err = |name: &str, dims| match build(name, dims) {
+        Err(Error::Usage(m)) => m,
+        _ => panic!("{name} {dims}D should be a usage error"),
+    };
+    let m = err("cjm", 2);
+    assert!(m.contains("'cmj'") && m.contains("pmj02"), "{m}");
+    let m = err("mj", 4);
+    assert!(m.contains("padded-mj"), "{m}");
+    let m = err("oa", 2);
+    assert!(m.contains("--dims 4"), "{m}");
+    let m = err("padded-foo", 4);
+    assert!(m.contains("padded-"), "{m}");
+    assert!(build("random", 3).is_err());
+    assert_eq!(build("xuyv-cmj", 4).unwrap().name(), "xuyv-cmj");
+}
+
+#[test]
+fn sheared_wraps_a_4d_sampler() {
+    let inner = build("xuyv-nrooks", 4).unwrap();
+    let sheared = Sheared::new(inner, 0.5, -0.3, ShearMode::Transported).unwrap();
+    assert_eq!(sheared.dims(), 4);
+    let pts = generate_sets(&sheared, 256, 2, 7).unwrap();
+    assert!(pts.data().iter().all(|c| (0.0..1.0).contains(c)));
+    // Transported shear: t = x + s u inherits the N-rooks stratification of the first coordinate, so
+    // the inverse CDF of t maps the points to one per stratum of N.
+    let set = pts.set(0);
+    let s = 0.5f64;
+    let cdf = |t: f64| {
+        // Trapezoid CDF of t = x + s u, x,u ~ U[0,1), s < 1.
+        if t < s {
+            t * t / (2.0 * s)
+        } else if t <= 1.0 {
+            t - s / 2.0
+        } else {
+            1.0 - (1.0 + s - t).powi(2) / (2.0 * s)
+        }
+    };
+    let a: Vec<(f64, f64)> = set
+        .chunks_exact(4)
+        .map(|p| (cdf(p[0] + s * p[2]).clamp(0.0, 1.0 - 1e-15), 0.5))
+        .collect();
+    assert!(stratified(&a, 256, 1));
+    assert!(Sheared::new(build("mj", 2).unwrap(), 0.5, 0.5, ShearMode::Wrap).is_err());
+}

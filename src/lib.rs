@@ -8,6 +8,7 @@ pub mod cli;
 pub mod converge;
 pub mod error;
 pub mod integrands;
+pub mod optimize;
 pub mod output;
 pub mod points;
 pub mod progress;
@@ -15,6 +16,7 @@ pub mod render;
 pub mod rng;
 pub mod samplers;
 pub mod spectrum;
+pub mod targets;
 pub mod variance;
 
 pub use error::{Error, Result};

@@ -34,6 +34,9 @@ enum Command {
     Oracle(cli::oracle::OracleArgs),
     /// The xu and yv slice spectra of one pixel's integrand.
     PixelSpectrum(cli::pixel_spectrum::PixelSpectrumArgs),
+    /// Optimize point sets until their spectra match a target (widened hairline, double wedge, ...)
+    /// and write them as tables.
+    Optimize(cli::optimize::OptimizeArgs),
 }
 
 fn main() -> ExitCode {
@@ -61,6 +64,7 @@ fn main() -> ExitCode {
         Command::Render(a) => cli::render::run(a),
         Command::Oracle(a) => cli::oracle::run(a),
         Command::PixelSpectrum(a) => cli::pixel_spectrum::run(a),
+        Command::Optimize(a) => cli::optimize::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -3,6 +3,7 @@
 pub mod converge;
 pub mod gallery;
 pub mod integrands;
+pub mod optimize;
 pub mod oracle;
 pub mod pixel_spectrum;
 pub mod render;

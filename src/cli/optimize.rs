@@ -1,0 +1,262 @@
+//! `anisospec optimize`: point sets whose spectra meet a target, written as tables (npy, text, C
+//! header) with a JSON sidecar and a CSV log.
+
+use crate::error::{Error, Result};
+use crate::optimize::{self, loss::Repulsion, metrics, Limits, Setup, Strata};
+use crate::output::{ensure_not_input, write_atomic};
+use crate::points::io::write_points;
+use crate::points::PointSets;
+use crate::spectrum::Method;
+use crate::targets::Target;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Optimize point sets toward a target spectrum (DESIGN §6).
+#[derive(clap::Args, Debug, Clone)]
+pub struct OptimizeArgs {
+    /// Target spectrum: a TOML file (see targets/*.toml).
+    #[arg(long)]
+    pub target: PathBuf,
+    /// Dimensions: 2 (the target on the set's two coordinates) or 4 (the target on xu and yv, xy and
+    /// uv kept stratified).
+    #[arg(long, default_value_t = 2)]
+    pub dims: usize,
+    /// Points per set.
+    #[arg(short = 'n', long)]
+    pub n: usize,
+    /// Number of sets; they are optimized in parallel, set s from random stream s of the seed.
+    #[arg(long, default_value_t = 1)]
+    pub sets: usize,
+    /// Seed of the random starts.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output table, `.npy` ([sets, N, D] float64); the same numbers go to `.txt`, `.h`, a `.json`
+    /// sidecar and a `.log.csv` next to it.
+    #[arg(short = 'o', long)]
+    pub output: PathBuf,
+    /// Largest number of solver iterations per set.
+    #[arg(long, default_value_t = 2000)]
+    pub max_iters: u64,
+    /// Largest wall time per set, in seconds (results depend on machine speed only if this binds).
+    #[arg(long, default_value_t = 60.0)]
+    pub max_seconds: f64,
+    /// Stop when a solver round lowers the loss by less than this fraction.
+    #[arg(long, default_value_t = 1e-6)]
+    pub tol: f64,
+    /// Compute the loss with the exact DFT instead of the NUFFT (slow; the reference).
+    #[arg(long)]
+    pub exact: bool,
+    /// NUFFT tolerance for the loss and its gradient.
+    #[arg(long, default_value_t = 1e-8)]
+    pub eps: f64,
+    /// 4D: radius of the blue-noise dark disc that keeps xy and uv stratified, in units of sqrt(N).
+    #[arg(long, default_value_t = 0.35)]
+    pub strat_radius: f64,
+    /// 4D: weight of the xy and uv stratification losses (0 leaves them free).
+    #[arg(long, default_value_t = 1.0)]
+    pub strat_weight: f64,
+    /// Repulsion radius in units of the mean spacing 1/sqrt(N) (0 switches repulsion off).
+    #[arg(long, default_value_t = 0.4)]
+    pub repulsion_radius: f64,
+    /// Repulsion strength.
+    #[arg(long, default_value_t = 1.0)]
+    pub repulsion_weight: f64,
+}
+
+fn check_args(args: &OptimizeArgs) -> Result<()> {
+    if args.output.extension().and_then(|e| e.to_str()) != Some("npy") {
+        return Err(Error::Usage(format!(
+            "-o {}: the table is written as numpy; name it .npy (the .txt, .h, .json and .log.csv go next to it)",
+            args.output.display()
+        )));
+    }
+    if args.n < 2 {
+        return Err(Error::Usage(format!(
+            "-n {}: an optimized set needs at least 2 points",
+            args.n
+        )));
+    }
+    if !(args.max_seconds.is_finite() && args.max_seconds > 0.0) {
+        return Err(Error::Usage(format!(
+            "--max-seconds {}: give a positive number of seconds",
+            args.max_seconds
+        )));
+    }
+    if !(args.tol.is_finite() && args.tol >= 0.0) {
+        return Err(Error::Usage(format!(
+            "--tol {}: give a finite number >= 0",
+            args.tol
+        )));
+    }
+    if !args.exact && !(1e-14..=1e-1).contains(&args.eps) {
+        return Err(Error::Usage(format!(
+            "--eps {}: the NUFFT tolerance must lie in [1e-14, 1e-1]",
+            args.eps
+        )));
+    }
+    if !(args.strat_radius.is_finite() && args.strat_radius >= 0.0) {
+        return Err(Error::Usage(format!(
+            "--strat-radius {}: give a finite radius >= 0",
+            args.strat_radius
+        )));
+    }
+    Ok(())
+}
+
+/// The sibling of `out` with another extension, e.g. `table.npy` → `table.json`.
+fn sibling(out: &Path, ext: &str) -> PathBuf {
+    out.with_extension(ext)
+}
+
+/// Runs `anisospec optimize`.
+pub fn run(args: &OptimizeArgs) -> Result<()> {
+    check_args(args)?;
+    let target = Target::load(&args.target)?;
+    let outputs: Vec<PathBuf> = ["npy", "txt", "h", "json", "log.csv"]
+        .iter()
+        .map(|e| sibling(&args.output, e))
+        .collect();
+    for o in &outputs {
+        ensure_not_input(o, Some(&args.target))?;
+    }
+    let setup = Setup {
+        target: target.clone(),
+        n: args.n,
+        dims: args.dims,
+        strata: Strata {
+            radius: args.strat_radius,
+            weight: args.strat_weight,
+        },
+        repulsion: Repulsion {
+            radius: args.repulsion_radius,
+            weight: args.repulsion_weight,
+        },
+        method: if args.exact {
+            Method::Exact
+        } else {
+            Method::Nufft { eps: args.eps }
+        },
+        limits: Limits {
+            max_iters: args.max_iters,
+            max_seconds: args.max_seconds,
+            tol: args.tol,
+        },
+    };
+    let objective = setup.objective()?;
+    let bar = if std::io::stderr().is_terminal() {
+        let b = indicatif::ProgressBar::new(args.sets as u64);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "optimize {bar:30} {pos}/{len} sets [{elapsed_precise} < {eta}] {msg}",
+        ) {
+            b.set_style(style);
+        }
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let t0 = Instant::now();
+    let (points, reports) = optimize::optimize_sets(&setup, args.sets, args.seed, &|r| {
+        bar.set_message(format!("set {} loss {:.3e}", r.set, r.loss));
+        bar.inc(1);
+    })?;
+    bar.finish_and_clear();
+    let seconds = t0.elapsed().as_secs_f64();
+
+    let mut fits = Vec::new();
+    for term in &objective.terms {
+        fits.push(metrics::fit(&points, term.proj, &term.grid, setup.method));
+    }
+    let wide = target.check_grid(args.n)?;
+    let wide_fit = metrics::fit(&points, objective.terms[0].proj, &wide, setup.method);
+
+    write_points(&outputs[0], &points)?;
+    write_points(&outputs[1], &points)?;
+    write_header(&outputs[2], &points, args)?;
+    let losses: Vec<f64> = reports.iter().map(|r| r.loss).collect();
+    let sidecar = serde_json::json!({
+        "target_file": args.target,
+        "target": target,
+        "parameters": {
+            "n": args.n, "dims": args.dims, "sets": args.sets, "seed": args.seed,
+            "method": if args.exact { "exact".to_string() } else { format!("nufft eps={}", args.eps) },
+            "strata": setup.strata, "repulsion": { "radius": setup.repulsion.radius, "weight": setup.repulsion.weight },
+            "limits": setup.limits,
+            "grid_res": objective.terms.iter().map(|t| t.grid.res).collect::<Vec<_>>(),
+        },
+        "final_loss": {
+            "mean": losses.iter().sum::<f64>() / losses.len() as f64,
+            "max": losses.iter().copied().fold(f64::MIN, f64::max),
+        },
+        "fit": fits,
+        "fit_twice_the_radius": wide_fit,
+        "sets": reports,
+        "seconds": seconds,
+    });
+    let text = serde_json::to_string_pretty(&sidecar)
+        .map_err(|e| Error::Numerical(format!("cannot encode the sidecar: {e}")))?;
+    write_atomic(&outputs[3], |w| writeln!(w, "{text}"))?;
+    write_atomic(&outputs[4], |w| {
+        writeln!(w, "set,iter,seconds,loss,solver")?;
+        for r in &reports {
+            for row in &r.log {
+                writeln!(
+                    w,
+                    "{},{},{},{},{}",
+                    r.set, row.iter, row.seconds, row.loss, row.solver
+                )?;
+            }
+        }
+        Ok(())
+    })?;
+    for f in &fits {
+        eprintln!(
+            "{}: dark mean P {:.4} over {} cells, annular error max {:.4} (rms {:.4}) over {} sets",
+            f.proj, f.dark_mean, f.dark_cells, f.annular_max_error, f.annular_rms_error, f.sets
+        );
+    }
+    eprintln!(
+        "wrote {} ({} sets of {} points in {}D, {:.1} s)",
+        outputs[0].display(),
+        args.sets,
+        args.n,
+        args.dims,
+        seconds
+    );
+    Ok(())
+}
+
+/// A C header with the same numbers as the npy table: `double NAME[sets][n][dims]`.
+fn write_header(path: &Path, points: &PointSets, args: &OptimizeArgs) -> Result<()> {
+    write_atomic(path, |w| {
+        writeln!(
+            w,
+            "/* anisospec optimize --target {} --dims {} -n {} --sets {} --seed {} */",
+            args.target.display(),
+            args.dims,
+            args.n,
+            args.sets,
+            args.seed
+        )?;
+        writeln!(w, "#ifndef ANISOSPEC_TABLE_H\n#define ANISOSPEC_TABLE_H")?;
+        writeln!(w, "#define ANISOSPEC_TABLE_SETS {}", points.sets())?;
+        writeln!(w, "#define ANISOSPEC_TABLE_N {}", points.n())?;
+        writeln!(w, "#define ANISOSPEC_TABLE_DIMS {}", points.dims())?;
+        writeln!(
+            w,
+            "static const double anisospec_table[{}][{}][{}] = {{",
+            points.sets(),
+            points.n(),
+            points.dims()
+        )?;
+        for s in 0..points.sets() {
+            writeln!(w, "  {{")?;
+            for p in points.set(s).chunks_exact(points.dims()) {
+                let cells: Vec<String> = p.iter().map(|c| format!("{c:.17e}")).collect();
+                writeln!(w, "    {{{}}},", cells.join(", "))?;
+            }
+            writeln!(w, "  }},")?;
+        }
+        writeln!(w, "}};\n#endif")
+    })
+}

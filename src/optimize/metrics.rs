@@ -1,0 +1,121 @@
+//! How well sets meet their target: the expected spectrum over the sets against `T` (issue 5's fit
+//! criteria).
+
+use super::fourier;
+use crate::points::{PointSets, Projection};
+use crate::spectrum::Method;
+use crate::targets::TargetGrid;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Annuli with fewer non-dark cells than this are left out of the annular comparison.
+pub const MIN_ANNULUS_CELLS: usize = 8;
+
+/// The fit of one projection's expected spectrum to its target.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Fit {
+    /// Projection name, e.g. `xu`.
+    pub proj: String,
+    /// Sets the expectation was taken over.
+    pub sets: usize,
+    /// Number of dark cells (`T ≤` [`crate::targets::DARK_LEVEL`]) inside the fit radius.
+    pub dark_cells: usize,
+    /// Mean expected `P` over the dark cells (goal: `≤ 0.1`); 0 when there are none.
+    pub dark_mean: f64,
+    /// Largest `|mean P − mean T|` over the annuli `r − ½ ≤ |k| < r + ½` that lie wholly inside the fit
+    /// radius, over their non-dark cells (at least [`MIN_ANNULUS_CELLS`] of them) (goal: `≤ 0.1`).
+    pub annular_max_error: f64,
+    /// The annulus with the largest error, as `|k| / sqrt(N)`.
+    pub worst_radius: f64,
+    /// Root mean square of the same annular errors.
+    pub annular_rms_error: f64,
+    /// Number of annuli compared.
+    pub annuli: usize,
+}
+
+/// The expected spectrum `mean_s P_s(k)` of `proj` over all sets, on the grid's `res × res` frequencies.
+pub fn expected_power(
+    points: &PointSets,
+    proj: Projection,
+    res: usize,
+    method: Method,
+) -> Vec<f64> {
+    let n = points.n() as f64;
+    let per_set: Vec<Vec<f64>> = (0..points.sets())
+        .into_par_iter()
+        .map(|s| {
+            let f = fourier::type1(&points.project(s, proj), res, method);
+            f.iter().map(|z| z.norm_sqr() / n).collect()
+        })
+        .collect();
+    let mut mean = vec![0.0; res * res];
+    for p in &per_set {
+        for (m, v) in mean.iter_mut().zip(p) {
+            *m += v;
+        }
+    }
+    let count = points.sets() as f64;
+    mean.iter_mut().for_each(|m| *m /= count);
+    mean
+}
+
+/// The fit of `points`' expected spectrum in `proj` to `grid` (see [`Fit`]).
+pub fn fit(points: &PointSets, proj: Projection, grid: &TargetGrid, method: Method) -> Fit {
+    let res = grid.res;
+    let p = expected_power(points, proj, res, method);
+    let half = (res / 2) as f64;
+    let dark_sum: f64 = p
+        .iter()
+        .zip(&grid.dark)
+        .filter(|(_, &d)| d)
+        .map(|(v, _)| v)
+        .sum();
+    let dark_mean = if grid.dark_cells > 0 {
+        dark_sum / grid.dark_cells as f64
+    } else {
+        0.0
+    };
+    // Only whole annuli: r + ½ ≤ fit radius.
+    let bins = (grid.fit_radius - 0.5).floor().max(0.0) as usize;
+    let mut acc = vec![(0.0f64, 0.0f64, 0usize); bins + 1];
+    for idx in 0..res * res {
+        if grid.weight[idx] == 0.0 || grid.dark[idx] {
+            continue;
+        }
+        let (k1, k2) = ((idx % res) as f64 - half, (idx / res) as f64 - half);
+        let r = k1.hypot(k2).round() as usize;
+        if r <= bins {
+            acc[r].0 += p[idx];
+            acc[r].1 += grid.target[idx];
+            acc[r].2 += 1;
+        }
+    }
+    let errors: Vec<(usize, f64)> = acc
+        .iter()
+        .enumerate()
+        .filter(|(_, a)| a.2 >= MIN_ANNULUS_CELLS)
+        .map(|(r, a)| (r, ((a.0 - a.1) / a.2 as f64).abs()))
+        .collect();
+    let annuli = errors.len();
+    let (worst, annular_max_error) =
+        errors
+            .iter()
+            .copied()
+            .fold((0, 0.0), |m, e| if e.1 > m.1 { e } else { m });
+    let errors: Vec<f64> = errors.into_iter().map(|e| e.1).collect();
+    let annular_rms_error = if annuli > 0 {
+        (errors.iter().map(|e| e * e).sum::<f64>() / annuli as f64).sqrt()
+    } else {
+        0.0
+    };
+    Fit {
+        proj: proj.name(),
+        sets: points.sets(),
+        dark_cells: grid.dark_cells,
+        dark_mean,
+        annular_max_error,
+        worst_radius: worst as f64 / (points.n() as f64).sqrt(),
+        annular_rms_error,
+        annuli,
+    }
+}

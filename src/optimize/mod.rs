@@ -1,0 +1,304 @@
+//! The optimizer (DESIGN §6): moves the points of a set until its spectra in the projections that
+//! matter match their targets, then writes tables a renderer can use.
+//!
+//! - [`loss`]: the spectral loss and its exact gradient (type-1 + type-2 transforms), and a short-range
+//!   toroidal repulsion (kiddo periodic queries).
+//! - [`solver`]: argmin L-BFGS in rounds, with steepest descent as the fallback; limits on iterations,
+//!   time and tolerance; a log of loss against iteration and time.
+//! - [`metrics`]: the fit of the expected spectrum to the target.
+//! - [`optimize_sets`]: many sets in parallel, set `s` seeded by `rng::stream(seed, s)`.
+//!
+//! In 2D the target applies to the set's two coordinates. In 4D it applies to `xu` and `yv`, and `xy`
+//! and `uv` are kept stratified by a blue-noise dark-disc target.
+
+pub mod fourier;
+pub mod loss;
+pub mod metrics;
+pub mod solver;
+
+use crate::error::{Error, Result};
+use crate::points::{PointSets, Projection};
+use crate::rng::{self, Rng};
+use crate::spectrum::Method;
+use crate::targets::{BlueNoise, Target};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use loss::{Objective, Repulsion, Term};
+use rand::Rng as _;
+use rayon::prelude::*;
+use serde::Serialize;
+pub use solver::{Limits, LogRow};
+
+/// How the 4D `xy` and `uv` projections are kept stratified.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Strata {
+    /// Dark-disc radius of the blue-noise target, in units of `sqrt(N)`.
+    pub radius: f64,
+    /// Weight of each of the two projections' losses.
+    pub weight: f64,
+}
+
+impl Default for Strata {
+    fn default() -> Self {
+        Self {
+            radius: 0.35,
+            weight: 1.0,
+        }
+    }
+}
+
+/// Everything that defines an optimization apart from the seed.
+#[derive(Clone, Debug)]
+pub struct Setup {
+    /// The target for the 2D set, or for `xu` and `yv` in 4D.
+    pub target: Target,
+    /// Points per set.
+    pub n: usize,
+    /// 2 or 4.
+    pub dims: usize,
+    /// 4D only: the `xy` / `uv` stratification target.
+    pub strata: Strata,
+    /// The repulsion term.
+    pub repulsion: Repulsion,
+    /// Fourier method for the loss.
+    pub method: Method,
+    /// Stopping rules.
+    pub limits: Limits,
+}
+
+/// Default repulsion: radius 0.4 of the mean spacing, strength 1.
+pub const DEFAULT_REPULSION: Repulsion = Repulsion {
+    radius: 0.4,
+    weight: 1.0,
+};
+
+impl Setup {
+    /// The objective: the target on `xy` (2D) or on `xu` and `yv` plus the strata on `xy` and `uv`
+    /// (4D). Fails for bad dims, N, or a target out of reach.
+    pub fn objective(&self) -> Result<Objective> {
+        let grid = self.target.grid(self.n)?;
+        let terms = match self.dims {
+            2 => vec![Term {
+                proj: Projection::XY,
+                grid,
+                weight: 1.0,
+            }],
+            4 => {
+                let strata = Target::BlueNoise(BlueNoise {
+                    radius: self.strata.radius,
+                    dark_weight: None,
+                });
+                strata.validate()?;
+                let sg = strata.grid(self.n)?;
+                let mut t = vec![
+                    Term {
+                        proj: Projection::XU,
+                        grid: grid.clone(),
+                        weight: 1.0,
+                    },
+                    Term {
+                        proj: Projection::YV,
+                        grid,
+                        weight: 1.0,
+                    },
+                ];
+                if self.strata.weight > 0.0 {
+                    for proj in [Projection::XY, Projection::UV] {
+                        t.push(Term {
+                            proj,
+                            grid: sg.clone(),
+                            weight: self.strata.weight,
+                        });
+                    }
+                }
+                t
+            }
+            d => {
+                return Err(Error::Usage(format!(
+                    "--dims {d}: the optimizer makes 2D or 4D sets; use --dims 2 or --dims 4"
+                )))
+            }
+        };
+        for (name, v) in [
+            ("--repulsion-radius", self.repulsion.radius),
+            ("--repulsion-weight", self.repulsion.weight),
+            ("--strat-weight", self.strata.weight),
+        ] {
+            if !v.is_finite() || v < 0.0 {
+                return Err(Error::Usage(format!(
+                    "{name} {v}: it must be a finite number >= 0"
+                )));
+            }
+        }
+        Ok(Objective {
+            n: self.n,
+            dims: self.dims,
+            terms,
+            repulsion: self.repulsion,
+            method: self.method,
+        })
+    }
+}
+
+/// The outcome for one set.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SetReport {
+    /// Index of the set.
+    pub set: usize,
+    /// Loss at the start.
+    pub initial_loss: f64,
+    /// Final loss (spectral plus repulsion).
+    pub loss: f64,
+    /// Final spectral loss.
+    pub spectral: f64,
+    /// Final repulsion energy.
+    pub repulsion: f64,
+    /// Solver iterations.
+    pub iterations: u64,
+    /// Loss evaluations.
+    pub evaluations: u64,
+    /// Wall time in seconds.
+    pub seconds: f64,
+    /// Why it stopped.
+    pub stop: String,
+    /// Whether the fallback solver ran.
+    pub fallback_used: bool,
+    /// Points of the start that coincided with another in a constrained projection and were moved
+    /// apart by a tiny random step (a duplicate has the same gradient as its twin and never leaves it).
+    pub separated: usize,
+    /// Loss against iteration and time.
+    #[serde(skip)]
+    pub log: Vec<LogRow>,
+}
+
+/// Moves apart points that coincide (within `1e-9 / sqrt(N)`) with a lower-numbered point in any
+/// constrained projection, by a uniform step of up to `1e-3 / sqrt(N)` per coordinate. Returns how many
+/// moved.
+pub fn separate_duplicates(objective: &Objective, set: &mut [f64], rng: &mut Rng) -> usize {
+    let dims = objective.dims;
+    let n = objective.n;
+    let close = 1e-9 / (n as f64).sqrt();
+    let step = 1e-3 / (n as f64).sqrt();
+    let mut moved = vec![false; n];
+    let mut projs: Vec<Projection> = objective.terms.iter().map(|t| t.proj).collect();
+    projs.dedup();
+    for proj in projs {
+        let pts: Vec<[f64; 2]> = set
+            .chunks_exact(dims)
+            .map(|p| {
+                [
+                    crate::points::wrap(p[proj.a]),
+                    crate::points::wrap(p[proj.b]),
+                ]
+            })
+            .collect();
+        let tree: ImmutableKdTree<f64, 2> =
+            ImmutableKdTree::new_from_slice(&pts).expect("finite points build a tree");
+        for (i, p) in pts.iter().enumerate() {
+            let twins = tree
+                .query(p)
+                .periodic_boundary_condition(&[1.0, 1.0])
+                .within::<SquaredEuclidean<f64>>(close * close)
+                .execute();
+            if twins.iter().any(|q| (q.item as usize) < i) {
+                moved[i] = true;
+            }
+        }
+    }
+    for (i, m) in moved.iter().enumerate() {
+        if *m {
+            for c in &mut set[i * dims..(i + 1) * dims] {
+                *c = crate::points::wrap(*c + step * (rng.random::<f64>() - 0.5));
+            }
+        }
+    }
+    moved.iter().filter(|&&m| m).count()
+}
+
+/// Optimizes one set from `start` (`[n, dims]`, in `[0,1)`). `rng` breaks ties between duplicate
+/// points. Fails with `Error::Numerical` if the start's loss is not finite.
+pub fn optimize_set(
+    objective: &Objective,
+    start: &[f64],
+    limits: &Limits,
+    index: usize,
+    rng: &mut Rng,
+) -> Result<(Vec<f64>, SetReport)> {
+    if start.len() != objective.n * objective.dims {
+        return Err(Error::Input(format!(
+            "the start set has {} coordinates; {} points in {}D need {}",
+            start.len(),
+            objective.n,
+            objective.dims,
+            objective.n * objective.dims
+        )));
+    }
+    if let Some(c) = start.iter().find(|c| !c.is_finite()) {
+        return Err(Error::Input(format!(
+            "the start set holds the coordinate {c}; every coordinate must be finite"
+        )));
+    }
+    let mut set = start.to_vec();
+    let separated = separate_duplicates(objective, &mut set, rng);
+    let check = objective.evaluate(&set);
+    if !check.loss.is_finite() {
+        return Err(Error::Numerical(format!(
+            "set {index}: the loss at the start is {}; the optimizer cannot start from it",
+            check.loss
+        )));
+    }
+    let out = solver::minimize(objective, &set, limits);
+    let report = SetReport {
+        set: index,
+        initial_loss: out.initial.loss,
+        loss: out.last.loss,
+        spectral: out.last.spectral,
+        repulsion: out.last.repulsion,
+        iterations: out.iterations,
+        evaluations: out.evaluations,
+        seconds: out.seconds,
+        stop: out.stop,
+        fallback_used: out.fallback_used,
+        separated,
+        log: out.log,
+    };
+    Ok((out.set, report))
+}
+
+/// Optimizes `sets` sets from uniform random starts, in parallel; set `s` draws its start from
+/// `rng::stream(seed, s)`, so the result does not depend on the thread count (as long as the time limit
+/// does not bind). `on_done` is called once per finished set (e.g. to advance a progress bar).
+pub fn optimize_sets(
+    setup: &Setup,
+    sets: usize,
+    seed: u64,
+    on_done: &(dyn Fn(&SetReport) + Sync),
+) -> Result<(PointSets, Vec<SetReport>)> {
+    if sets == 0 {
+        return Err(Error::Usage(
+            "--sets 0 asks for nothing; give at least one set".into(),
+        ));
+    }
+    let objective = setup.objective()?;
+    let results: Vec<Result<(Vec<f64>, SetReport)>> = (0..sets)
+        .into_par_iter()
+        .map(|s| {
+            let mut rng = rng::stream(seed, s as u64);
+            let start: Vec<f64> = (0..setup.n * setup.dims)
+                .map(|_| rng.random::<f64>())
+                .collect();
+            let r = optimize_set(&objective, &start, &setup.limits, s, &mut rng);
+            if let Ok((_, rep)) = &r {
+                on_done(rep);
+            }
+            r
+        })
+        .collect();
+    let mut data = Vec::with_capacity(sets);
+    let mut reports = Vec::with_capacity(sets);
+    for r in results {
+        let (set, rep) = r?;
+        data.push(set);
+        reports.push(rep);
+    }
+    Ok((PointSets::from_sets(setup.dims, data)?, reports))
+}

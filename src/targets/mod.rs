@@ -1,0 +1,526 @@
+//! Target spectra for the optimizer (DESIGN §6), read from strict TOML files in `targets/`.
+//!
+//! A target is an expected power spectrum `T(k)` for one 2D projection, with `T = 0` in a *dark* region
+//! and `T = 1` elsewhere (image targets may hold any values `≥ 0`). Every length in a target file is a
+//! *normalized frequency* `ν = |k| / sqrt(N)`: a target means the same thing at every `N`, and its dark
+//! region holds about the same multiple of `N` frequency cells. A set of `N` points has `2N` degrees of
+//! freedom, and about `N` dark cells is what it can reach (N-rooks, for example, holds about `0.7 N`
+//! cells below `P = 0.1` along its two axes). [`Target::grid`] refuses targets darker than that and
+//! reports the reachable fraction.
+//!
+//! File format (one table, `kind` picks the shape, unknown keys are errors):
+//!
+//! ```toml
+//! kind = "double-wedge"   # or "hairline", "blue-noise", "image"
+//! s0 = 0.3                # dark between the lines k2 = s0 k1 and k2 = s1 k1 ...
+//! s1 = 0.7
+//! radius = 1.6            # ... up to |k| = radius * sqrt(N)
+//! ```
+
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The largest number of dark cells, in units of `N`, that a target may ask of `N` points.
+pub const REACH: f64 = 1.0;
+
+/// Cells with a target value at or below this level count as dark (for image targets and metrics).
+pub const DARK_LEVEL: f64 = 0.05;
+
+/// The default weight of the dark region's mean squared error relative to the rest (see
+/// [`TargetGrid::weight`]).
+pub const DEFAULT_DARK_WEIGHT: f64 = 4.0;
+
+/// A widened hairline: dark within perpendicular distance `half_width * sqrt(N)` of the line
+/// `k2 = shear * k1` up to `|k| = length * sqrt(N)`, and inside the disc `|k| < inner_radius * sqrt(N)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Hairline {
+    /// Slope `s` of the dark line `k2 = s k1` (the shear of the integrand `f(x + s u)`).
+    pub shear: f64,
+    /// Half-width of the dark band, in units of `sqrt(N)` frequency cells (0: a hairline).
+    pub half_width: f64,
+    /// How far the band reaches, in units of `sqrt(N)`.
+    pub length: f64,
+    /// Radius of the dark disc around the origin, in units of `sqrt(N)`.
+    #[serde(default)]
+    pub inner_radius: f64,
+    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
+    #[serde(default)]
+    pub dark_weight: Option<f64>,
+}
+
+/// A double wedge: dark between the lines `k2 = s0 k1` and `k2 = s1 k1` up to `|k| = radius * sqrt(N)`,
+/// and inside the disc `|k| < inner_radius * sqrt(N)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DoubleWedge {
+    /// Lower slope (`s0 ≤ s1`).
+    pub s0: f64,
+    /// Upper slope.
+    pub s1: f64,
+    /// Radius of the wedge, in units of `sqrt(N)`.
+    pub radius: f64,
+    /// Radius of the dark disc around the origin, in units of `sqrt(N)`.
+    #[serde(default)]
+    pub inner_radius: f64,
+    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
+    #[serde(default)]
+    pub dark_weight: Option<f64>,
+}
+
+/// Isotropic blue noise: dark inside the disc `|k| < radius * sqrt(N)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BlueNoise {
+    /// Radius of the dark disc, in units of `sqrt(N)`.
+    pub radius: f64,
+    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
+    #[serde(default)]
+    pub dark_weight: Option<f64>,
+}
+
+/// A target read from a 2D npy image of `T` values (`float64` or `float32`, shape `[rows, cols]`).
+///
+/// The image covers normalized frequencies `ν1, ν2 ∈ [−extent, extent)`: column `j` of `cols` spans
+/// `ν1 ∈ [−extent + 2·extent·j/cols, …)`, row `i` spans `ν2` likewise (row 0 lowest, the spectrum layout
+/// of DESIGN §3). Each frequency cell takes the value of the pixel holding `k / sqrt(N)`; `T = 1` outside
+/// the image. Cells with `T ≤` [`DARK_LEVEL`] are dark.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Image {
+    /// Path of the npy file, relative to the TOML file's folder.
+    pub file: PathBuf,
+    /// Half-width of the image in normalized frequency `ν`.
+    pub extent: f64,
+    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
+    #[serde(default)]
+    pub dark_weight: Option<f64>,
+    /// The pixel values, row-major, filled in by [`Target::load`].
+    #[serde(skip)]
+    pub pixels: Vec<f64>,
+    /// `[rows, cols]` of the image, filled in by [`Target::load`].
+    #[serde(skip)]
+    pub shape: [usize; 2],
+}
+
+/// A target spectrum: one of the shapes of DESIGN §6.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum Target {
+    /// Widened hairline (see [`Hairline`]).
+    Hairline(Hairline),
+    /// Double wedge (see [`DoubleWedge`]).
+    DoubleWedge(DoubleWedge),
+    /// Isotropic blue noise (see [`BlueNoise`]).
+    BlueNoise(BlueNoise),
+    /// Loaded from an image (see [`Image`]).
+    Image(Image),
+}
+
+/// A target laid out on a frequency grid for a given `N`: the values `T(k)`, the loss weights `W(k)`
+/// and the dark mask, each `res × res` in the layout of DESIGN §3 (`[i * res + j]`, `k1 = j − res/2`,
+/// `k2 = i − res/2`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TargetGrid {
+    /// Points per set the grid was made for.
+    pub n: usize,
+    /// Grid size `K` (even).
+    pub res: usize,
+    /// Fit radius in frequency cells: `W = 0` beyond it.
+    pub fit_radius: f64,
+    /// `T(k)`.
+    pub target: Vec<f64>,
+    /// `W(k) ≥ 0`: `dark_weight / (dark + rim cells)` on dark cells and on the rim (non-dark cells next
+    /// to a dark one, where pushed-out energy piles up first), `1 / (other cells)` on the others inside
+    /// the fit radius, 0 at `k = 0`, on the unpaired row and column `−K/2`, and beyond the fit radius.
+    /// The loss is then `dark_weight ×` (mean squared error over dark and rim) `+` (the same elsewhere).
+    pub weight: Vec<f64>,
+    /// Dark cells (`T ≤` [`DARK_LEVEL`]) inside the fit radius, excluding `k = 0`.
+    pub dark: Vec<bool>,
+    /// Number of dark cells.
+    pub dark_cells: usize,
+}
+
+fn finite(name: &str, v: f64) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::Input(format!(
+            "target parameter '{name}' is {v}; every parameter must be a finite number"
+        )))
+    }
+}
+
+fn non_negative(name: &str, v: f64) -> Result<()> {
+    finite(name, v)?;
+    if v < 0.0 {
+        return Err(Error::Input(format!(
+            "target parameter '{name}' is {v}; it is a width or radius and must be >= 0"
+        )));
+    }
+    Ok(())
+}
+
+fn dark_weight(w: Option<f64>) -> Result<f64> {
+    let w = w.unwrap_or(DEFAULT_DARK_WEIGHT);
+    finite("dark_weight", w)?;
+    if w <= 0.0 {
+        return Err(Error::Input(format!(
+            "target parameter 'dark_weight' is {w}; it must be > 0"
+        )));
+    }
+    Ok(w)
+}
+
+impl Target {
+    /// Reads and checks a target file. Unknown keys, non-finite numbers, negative widths and radii,
+    /// `s0 > s1` and unreadable images are errors (`Error::Input`) naming the problem.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io("read", path, e))?;
+        let mut target = Self::parse(&text).map_err(|e| match e {
+            Error::Input(m) => Error::Input(format!("{}: {m}", path.display())),
+            other => other,
+        })?;
+        if let Target::Image(img) = &mut target {
+            let dir = path.parent().unwrap_or(Path::new("."));
+            let file = dir.join(&img.file);
+            let (pixels, shape) = read_image(&file)?;
+            img.pixels = pixels;
+            img.shape = shape;
+        }
+        Ok(target)
+    }
+
+    /// Parses and checks a target from TOML text. Image pixels are not read (see [`Target::load`]).
+    pub fn parse(text: &str) -> Result<Self> {
+        let target: Target = toml::from_str(text).map_err(|e| {
+            Error::Input(format!(
+                "not a valid target: {}; a target file has kind = \"hairline\" | \"double-wedge\" | \"blue-noise\" | \"image\" and that kind's keys (see targets/*.toml)",
+                e.message()
+            ))
+        })?;
+        target.validate()?;
+        Ok(target)
+    }
+
+    /// Checks every parameter (finite, widths and radii `≥ 0`, `s0 ≤ s1`).
+    pub fn validate(&self) -> Result<()> {
+        match self {
+            Target::Hairline(h) => {
+                finite("shear", h.shear)?;
+                non_negative("half_width", h.half_width)?;
+                non_negative("length", h.length)?;
+                non_negative("inner_radius", h.inner_radius)?;
+                dark_weight(h.dark_weight)?;
+            }
+            Target::DoubleWedge(d) => {
+                finite("s0", d.s0)?;
+                finite("s1", d.s1)?;
+                if d.s0 > d.s1 {
+                    return Err(Error::Input(format!(
+                        "target has s0 = {} > s1 = {}; the wedge lies between the slopes s0 <= s1, swap them",
+                        d.s0, d.s1
+                    )));
+                }
+                non_negative("radius", d.radius)?;
+                non_negative("inner_radius", d.inner_radius)?;
+                dark_weight(d.dark_weight)?;
+            }
+            Target::BlueNoise(b) => {
+                non_negative("radius", b.radius)?;
+                dark_weight(b.dark_weight)?;
+            }
+            Target::Image(i) => {
+                non_negative("extent", i.extent)?;
+                if i.extent == 0.0 {
+                    return Err(Error::Input(
+                        "target parameter 'extent' is 0; the image must cover a positive range of normalized frequency".into(),
+                    ));
+                }
+                dark_weight(i.dark_weight)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The kind's name, as in the file.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Target::Hairline(_) => "hairline",
+            Target::DoubleWedge(_) => "double-wedge",
+            Target::BlueNoise(_) => "blue-noise",
+            Target::Image(_) => "image",
+        }
+    }
+
+    /// How far the target's features reach, in normalized frequency `ν`.
+    pub fn extent(&self) -> f64 {
+        match self {
+            Target::Hairline(h) => h.length.max(h.inner_radius),
+            Target::DoubleWedge(d) => d.radius.max(d.inner_radius),
+            Target::BlueNoise(b) => b.radius,
+            Target::Image(i) => i.extent * std::f64::consts::SQRT_2,
+        }
+    }
+
+    fn dark_weight(&self) -> f64 {
+        let w = match self {
+            Target::Hairline(h) => h.dark_weight,
+            Target::DoubleWedge(d) => d.dark_weight,
+            Target::BlueNoise(b) => b.dark_weight,
+            Target::Image(i) => i.dark_weight,
+        };
+        w.unwrap_or(DEFAULT_DARK_WEIGHT)
+    }
+
+    /// `T` at the normalized frequency `(ν1, ν2) = k / sqrt(N)`.
+    pub fn value(&self, nu1: f64, nu2: f64) -> f64 {
+        let r = nu1.hypot(nu2);
+        let dark = match self {
+            Target::Hairline(h) => {
+                // Perpendicular distance from (ν1, ν2) to the line ν2 = s ν1.
+                let dist = (nu2 - h.shear * nu1).abs() / h.shear.hypot(1.0);
+                (dist <= h.half_width && r <= h.length) || r < h.inner_radius
+            }
+            Target::DoubleWedge(d) => {
+                let inside = nu1 != 0.0 && {
+                    let slope = nu2 / nu1;
+                    slope >= d.s0 && slope <= d.s1
+                };
+                (inside && r <= d.radius) || r < d.inner_radius
+            }
+            Target::BlueNoise(b) => r < b.radius,
+            // Symmetrized so that W and T are even in k, as the loss's gradient assumes.
+            Target::Image(i) => {
+                return 0.5 * (image_value(i, nu1, nu2) + image_value(i, -nu1, -nu2))
+            }
+        };
+        if dark {
+            0.0
+        } else {
+            1.0
+        }
+    }
+
+    /// Lays the target out for `n` points: grid size, `T`, weights and dark mask. Fails with
+    /// `Error::Input` when the dark region holds more than [`REACH`]` × N` cells, naming the reachable
+    /// fraction.
+    pub fn grid(&self, n: usize) -> Result<TargetGrid> {
+        let sqrt_n = (n as f64).sqrt();
+        let ext = self.extent() * sqrt_n;
+        // Fit a margin around the features so the energy they push out is kept flat too.
+        let fit_radius = (2.0 * ext).max(ext + sqrt_n).max(4.0);
+        self.grid_within(n, fit_radius)
+    }
+
+    /// The area of the dark region in normalized frequency, i.e. its expected number of frequency
+    /// cells in units of `N` (an upper bound where parts overlap).
+    pub fn dark_area(&self) -> f64 {
+        use std::f64::consts::PI;
+        match self {
+            Target::Hairline(h) => 4.0 * h.half_width * h.length + PI * h.inner_radius.powi(2),
+            Target::DoubleWedge(d) => {
+                (d.s1.atan() - d.s0.atan()) * d.radius.powi(2) + PI * d.inner_radius.powi(2)
+            }
+            Target::BlueNoise(b) => PI * b.radius.powi(2),
+            Target::Image(i) => {
+                let dark = i.pixels.iter().filter(|&&v| v <= DARK_LEVEL).count();
+                dark as f64 / i.pixels.len().max(1) as f64 * (2.0 * i.extent).powi(2)
+            }
+        }
+    }
+
+    /// The grid the fit is judged on: twice the fit radius of [`Target::grid`], so that energy pushed
+    /// just beyond the optimized range is seen.
+    pub fn check_grid(&self, n: usize) -> Result<TargetGrid> {
+        let fit = self.grid(n)?.fit_radius;
+        self.grid_within(n, 2.0 * fit)
+    }
+
+    /// Like [`Target::grid`] but with the fit radius (in frequency cells) given: used to judge a fit
+    /// beyond the radius it was optimized over.
+    pub fn grid_within(&self, n: usize, fit_radius: f64) -> Result<TargetGrid> {
+        if n < 2 {
+            return Err(Error::Usage(format!(
+                "-n {n}: an optimized set needs at least 2 points"
+            )));
+        }
+        // Refuse hopeless targets before laying out a grid that may not fit in memory.
+        let estimate = self.dark_area() * n as f64;
+        if estimate > 4.0 * REACH * n as f64 {
+            return Err(self.beyond_reach(n, estimate));
+        }
+        let sqrt_n = (n as f64).sqrt();
+        let res = 2 * (fit_radius.ceil() as usize) + 2;
+        let half = (res / 2) as i64;
+        let mut target = vec![1.0; res * res];
+        let mut dark = vec![false; res * res];
+        let mut inside = vec![false; res * res];
+        for i in 0..res {
+            for j in 0..res {
+                let (k1, k2) = (j as i64 - half, i as i64 - half);
+                let idx = i * res + j;
+                let t = self.value(k1 as f64 / sqrt_n, k2 as f64 / sqrt_n);
+                target[idx] = t;
+                let r = (k1 as f64).hypot(k2 as f64);
+                let paired = k1 > -half && k2 > -half;
+                if paired && (k1, k2) != (0, 0) && r <= fit_radius {
+                    inside[idx] = true;
+                    dark[idx] = t <= DARK_LEVEL;
+                }
+            }
+        }
+        let dark_cells = dark.iter().filter(|&&d| d).count();
+        let reach = REACH * n as f64;
+        if dark_cells as f64 > reach {
+            return Err(self.beyond_reach(n, dark_cells as f64));
+        }
+        // The rim: non-dark cells next to a dark one (8-neighbourhood), where the energy pushed out of
+        // the dark region piles up first. They get the dark cells' weight.
+        let rim: Vec<bool> = (0..res * res)
+            .map(|idx| {
+                let (i, j) = ((idx / res) as i64, (idx % res) as i64);
+                inside[idx]
+                    && !dark[idx]
+                    && (-1..=1).any(|di| {
+                        (-1..=1).any(|dj| {
+                            let (a, b) = (i + di, j + dj);
+                            a >= 0
+                                && b >= 0
+                                && a < res as i64
+                                && b < res as i64
+                                && dark[(a * res as i64 + b) as usize]
+                        })
+                    })
+            })
+            .collect();
+        let rim_cells = rim.iter().filter(|&&r| r).count();
+        let others = inside.iter().filter(|&&c| c).count() - dark_cells - rim_cells;
+        let wd = self.dark_weight();
+        let weight = (0..res * res)
+            .map(|idx| {
+                if !inside[idx] {
+                    0.0
+                } else if dark[idx] || rim[idx] {
+                    wd / (dark_cells + rim_cells) as f64
+                } else {
+                    1.0 / others.max(1) as f64
+                }
+            })
+            .collect();
+        Ok(TargetGrid {
+            n,
+            res,
+            fit_radius,
+            target,
+            weight,
+            dark,
+            dark_cells,
+        })
+    }
+}
+
+impl Target {
+    fn beyond_reach(&self, n: usize, dark_cells: f64) -> Error {
+        let reach = REACH * n as f64;
+        Error::Input(format!(
+            "the {} target darkens {dark_cells:.0} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}: reachable fraction {:.3}. Shrink its dark region (radius, length or half-width) by that factor in area",
+            self.kind(),
+            reach / dark_cells
+        ))
+    }
+}
+
+fn image_value(img: &Image, nu1: f64, nu2: f64) -> f64 {
+    let [rows, cols] = img.shape;
+    if rows == 0 || cols == 0 {
+        return 1.0;
+    }
+    let e = img.extent;
+    let fj = (nu1 + e) / (2.0 * e) * cols as f64;
+    let fi = (nu2 + e) / (2.0 * e) * rows as f64;
+    if fj < 0.0 || fi < 0.0 || fj >= cols as f64 || fi >= rows as f64 {
+        return 1.0;
+    }
+    img.pixels[fi as usize * cols + fj as usize]
+}
+
+/// Reads a 2D npy image of target values (`float64` or `float32`, finite, `≥ 0`).
+fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io("read the target image", path, e))?;
+    let bad = |why: String| {
+        Error::Input(format!(
+            "{}: not a usable target image ({why}); give a 2D float64 or float32 npy array of values >= 0",
+            path.display()
+        ))
+    };
+    let npy = npyz::NpyFile::new(&bytes[..]).map_err(|e| bad(e.to_string()))?;
+    let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
+    let [rows, cols] = shape[..] else {
+        return Err(bad(format!("shape {shape:?}")));
+    };
+    if rows == 0 || cols == 0 {
+        return Err(bad("it is empty".into()));
+    }
+    let is_f32 = npy.dtype().num_bytes() == Some(4);
+    let pixels: Vec<f64> = if is_f32 {
+        npy.into_vec::<f32>()
+            .map_err(|e| bad(e.to_string()))?
+            .into_iter()
+            .map(f64::from)
+            .collect()
+    } else {
+        npy.into_vec::<f64>().map_err(|e| bad(e.to_string()))?
+    };
+    if let Some((at, v)) = pixels
+        .iter()
+        .enumerate()
+        .find(|(_, v)| !v.is_finite() || **v < 0.0)
+    {
+        return Err(bad(format!("pixel ({}, {}) is {v}", at / cols, at % cols)));
+    }
+    Ok((pixels, [rows, cols]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parse_rejects_bad_files() {
+        let ok = "kind = \"double-wedge\"\ns0 = 0.3\ns1 = 0.7\nradius = 1.5\n";
+        assert!(Target::parse(ok).is_ok());
+        let unknown = format!("{ok}colour = 3\n");
+        assert!(Target::parse(&unknown).is_err());
+        let swapped = "kind = \"double-wedge\"\ns0 = 0.7\ns1 = 0.3\nradius = 1.5\n";
+        assert!(Target::parse(swapped)
+            .unwrap_err()
+            .to_string()
+            .contains("s0"));
+        let nan = "kind = \"blue-noise\"\nradius = nan\n";
+        assert!(Target::parse(nan)
+            .unwrap_err()
+            .to_string()
+            .contains("finite"));
+        let neg = "kind = \"hairline\"\nshear = 0.5\nhalf_width = -0.1\nlength = 1\n";
+        assert!(Target::parse(neg)
+            .unwrap_err()
+            .to_string()
+            .contains("half_width"));
+    }
+
+    #[test]
+    fn dark_area_scales_with_n() {
+        let t = Target::parse("kind = \"blue-noise\"\nradius = 0.5\n").unwrap();
+        for n in [256, 1024, 4096] {
+            let g = t.grid(n).unwrap();
+            let frac = g.dark_cells as f64 / n as f64;
+            // π ρ² = 0.785; lattice counting error shrinks with N.
+            assert!((frac - 0.785).abs() < 0.1, "n={n}: {frac}");
+        }
+        let too_dark = Target::parse("kind = \"blue-noise\"\nradius = 2\n").unwrap();
+        let e = too_dark.grid(256).unwrap_err().to_string();
+        assert!(e.contains("reachable fraction"), "{e}");
+    }
+}

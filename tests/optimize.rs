@@ -1,0 +1,307 @@
+//! Issue 5: targets and the optimizer. Gradient checks, target file errors, spectral fit of every
+//! shipped target at N = 256, stability on degenerate starts and extreme targets, determinism.
+
+use anisospec::optimize::loss::{Objective, Repulsion, Term};
+use anisospec::optimize::{
+    metrics, optimize_set, optimize_sets, Limits, Setup, Strata, DEFAULT_REPULSION,
+};
+use anisospec::output::write_npy;
+use anisospec::points::Projection;
+use anisospec::rng;
+use anisospec::spectrum::Method;
+use anisospec::targets::Target;
+use rand::Rng as _;
+use std::path::{Path, PathBuf};
+
+fn shipped(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("targets")
+        .join(name)
+}
+
+/// An image target on disk: a dark ellipse, written to a temporary folder.
+fn image_target(dir: &Path) -> Target {
+    let m = 32;
+    let mut px = vec![1.0; m * m];
+    for i in 0..m {
+        for j in 0..m {
+            let (a, b) = (
+                (j as f64 + 0.5) / m as f64 * 2.0 - 1.0,
+                (i as f64 + 0.5) / m as f64 * 2.0 - 1.0,
+            );
+            if (a / 0.5).powi(2) + (b / 0.3).powi(2) < 1.0 {
+                px[i * m + j] = 0.0;
+            }
+        }
+    }
+    write_npy(&dir.join("img.npy"), &[m, m], &px).unwrap();
+    std::fs::write(
+        dir.join("img.toml"),
+        "kind = \"image\"\nfile = \"img.npy\"\nextent = 1.0\n",
+    )
+    .unwrap();
+    Target::load(&dir.join("img.toml")).unwrap()
+}
+
+fn all_target_kinds(dir: &Path) -> Vec<Target> {
+    vec![
+        Target::parse("kind = \"hairline\"\nshear = 0.5\nhalf_width = 0.1\nlength = 1.2\ninner_radius = 0.3\n").unwrap(),
+        Target::parse("kind = \"double-wedge\"\ns0 = 0.3\ns1 = 0.7\nradius = 1.2\ninner_radius = 0.2\n").unwrap(),
+        Target::parse("kind = \"blue-noise\"\nradius = 0.45\n").unwrap(),
+        image_target(dir),
+    ]
+}
+
+/// Central finite differences of the loss against the analytic gradient (type-1 + type-2 path),
+/// relative error in the Euclidean norm over all coordinates.
+fn gradient_error(obj: &Objective, set: &[f64]) -> f64 {
+    let g = obj.evaluate(set).gradient;
+    let h = 1e-6;
+    let mut num = 0.0;
+    let mut den = 0.0;
+    let mut x = set.to_vec();
+    for i in 0..set.len() {
+        x[i] = set[i] + h;
+        let lp = obj.evaluate(&x).loss;
+        x[i] = set[i] - h;
+        let lm = obj.evaluate(&x).loss;
+        x[i] = set[i];
+        let fd = (lp - lm) / (2.0 * h);
+        num += (fd - g[i]).powi(2);
+        den += g[i] * g[i];
+    }
+    (num / den).sqrt()
+}
+
+#[test]
+fn gradient_matches_finite_differences_for_every_target_kind() {
+    let dir = tempfile::tempdir().unwrap();
+    // A repulsion radius of 1.5 mean spacings makes many pairs interact, so that term is checked too.
+    let repulsion = Repulsion {
+        radius: 1.5,
+        weight: 1.0,
+    };
+    for (t, target) in all_target_kinds(dir.path()).into_iter().enumerate() {
+        for dims in [2, 4] {
+            let n = 48;
+            let setup = Setup {
+                target: target.clone(),
+                n,
+                dims,
+                strata: Strata::default(),
+                repulsion,
+                method: Method::Exact,
+                limits: Limits::default(),
+            };
+            let obj = setup.objective().unwrap();
+            let mut r = rng::stream(77, (t * 10 + dims) as u64);
+            let set: Vec<f64> = (0..n * dims).map(|_| r.random::<f64>()).collect();
+            assert!(
+                obj.evaluate(&set).repulsion > 0.0,
+                "repulsion term inactive"
+            );
+            let err = gradient_error(&obj, &set);
+            eprintln!(
+                "{} {dims}D: relative gradient error {err:.2e}",
+                target.kind()
+            );
+            assert!(
+                err <= 1e-5,
+                "{} in {dims}D: relative gradient error {err:.2e}",
+                target.kind()
+            );
+        }
+    }
+}
+
+#[test]
+fn target_files_are_strict() {
+    for name in [
+        "hairline.toml",
+        "double-wedge.toml",
+        "blue-noise.toml",
+        "image-ellipse.toml",
+    ] {
+        let t = Target::load(&shipped(name)).unwrap();
+        for n in [64, 256, 1024, 4096] {
+            t.grid(n).unwrap_or_else(|e| panic!("{name} at N={n}: {e}"));
+        }
+    }
+    let cases = [
+        (
+            "kind = \"blue-noise\"\nradius = 0.4\nradus = 1\n",
+            "unknown field",
+        ),
+        ("kind = \"blue-noise\"\nradius = nan\n", "finite"),
+        (
+            "kind = \"hairline\"\nshear = 0.5\nhalf_width = -0.1\nlength = 1\n",
+            "half_width",
+        ),
+        (
+            "kind = \"double-wedge\"\ns0 = 0.7\ns1 = 0.3\nradius = 1\n",
+            "s0 = 0.7 > s1 = 0.3",
+        ),
+        ("kind = \"spiral\"\nradius = 1\n", "kind"),
+    ];
+    for (text, needle) in cases {
+        let e = Target::parse(text).unwrap_err();
+        assert!(e.to_string().contains(needle), "{text:?}: {e}");
+        assert_eq!(e.exit_code(), 2);
+    }
+    // Beyond reach: a blue-noise disc of radius 1 darkens about pi N cells.
+    let far = Target::parse("kind = \"blue-noise\"\nradius = 1.0\n").unwrap();
+    let e = far.grid(256).unwrap_err().to_string();
+    let frac: f64 = e.split("reachable fraction ").nth(1).unwrap()[..5]
+        .parse()
+        .unwrap();
+    assert!((frac - 1.0 / std::f64::consts::PI).abs() < 0.03, "{e}");
+}
+
+#[test]
+fn shipped_targets_fit_at_256() {
+    let n = 256;
+    let sets = 8;
+    for name in [
+        "hairline.toml",
+        "double-wedge.toml",
+        "blue-noise.toml",
+        "image-ellipse.toml",
+    ] {
+        let target = Target::load(&shipped(name)).unwrap();
+        let setup = Setup {
+            target,
+            n,
+            dims: 2,
+            strata: Strata::default(),
+            repulsion: DEFAULT_REPULSION,
+            method: Method::Nufft { eps: 1e-8 },
+            limits: Limits {
+                max_iters: 3000,
+                max_seconds: 120.0,
+                tol: 1e-6,
+            },
+        };
+        let obj = setup.objective().unwrap();
+        let (pts, reports) = optimize_sets(&setup, sets, 2024, &|_| {}).unwrap();
+        assert!(reports
+            .iter()
+            .all(|r| r.loss.is_finite() && r.loss < r.initial_loss));
+        let fit = metrics::fit(&pts, Projection::XY, &obj.terms[0].grid, Method::Exact);
+        eprintln!("{name} N={n}: {fit:?}");
+        assert!(fit.dark_mean <= 0.1, "{name}: dark mean {}", fit.dark_mean);
+        assert!(
+            fit.annular_max_error <= 0.1,
+            "{name}: annular error {}",
+            fit.annular_max_error
+        );
+    }
+}
+
+/// A 2D objective on the shipped blue-noise target, small N.
+fn small_objective(n: usize) -> Objective {
+    let target = Target::load(&shipped("blue-noise.toml")).unwrap();
+    Objective {
+        n,
+        dims: 2,
+        terms: vec![Term {
+            proj: Projection::XY,
+            grid: target.grid(n).unwrap(),
+            weight: 1.0,
+        }],
+        repulsion: DEFAULT_REPULSION,
+        method: Method::Exact,
+    }
+}
+
+#[test]
+fn degenerate_starts_end_in_a_finite_report() {
+    let n = 64;
+    let obj = small_objective(n);
+    let limits = Limits {
+        max_iters: 400,
+        max_seconds: 60.0,
+        tol: 1e-6,
+    };
+    let mut r = rng::stream(5, 0);
+    // All points in one cell of side 1/sqrt(N).
+    let cell: Vec<f64> = (0..2 * n).map(|_| 0.3 + r.random::<f64>() / 8.0).collect();
+    // Every point twice (pairs of duplicates), and one point repeated N times.
+    let half: Vec<f64> = (0..n).map(|_| r.random::<f64>()).collect();
+    let dup: Vec<f64> = half.iter().chain(half.iter()).copied().collect();
+    let same: Vec<f64> = (0..n).flat_map(|_| [0.25, 0.75]).collect();
+    for (name, start) in [("one cell", cell), ("duplicates", dup), ("all equal", same)] {
+        let (set, rep) = optimize_set(&obj, &start, &limits, 0, &mut rng::stream(6, 0)).unwrap();
+        assert!(
+            set.iter().all(|c| c.is_finite() && (0.0..1.0).contains(c)),
+            "{name}"
+        );
+        assert!(
+            rep.loss.is_finite() && rep.loss < rep.initial_loss,
+            "{name}: {rep:?}"
+        );
+        assert!(!rep.stop.is_empty());
+        eprintln!(
+            "{name}: loss {:.3e} -> {:.3e}, separated {}, {}",
+            rep.initial_loss, rep.loss, rep.separated, rep.stop
+        );
+        if name != "one cell" {
+            assert!(rep.separated > 0, "{name}: duplicates not separated");
+        }
+    }
+}
+
+#[test]
+fn extreme_targets_end_in_a_clear_report() {
+    // Zero width: the hairline is a line of measure zero; only its inner disc and the cells exactly on
+    // the line are dark. It optimizes to a finite loss.
+    let zero = Target::parse("kind = \"hairline\"\nshear = 0.0\nhalf_width = 0.0\nlength = 1.0\n")
+        .unwrap();
+    let g = zero.grid(64).unwrap();
+    assert_eq!(g.dark_cells, 16, "the k1 axis up to radius 8, both sides");
+    let setup = Setup {
+        target: zero,
+        n: 64,
+        dims: 2,
+        strata: Strata::default(),
+        repulsion: DEFAULT_REPULSION,
+        method: Method::Exact,
+        limits: Limits {
+            max_iters: 300,
+            max_seconds: 60.0,
+            tol: 1e-6,
+        },
+    };
+    let (_, reports) = optimize_sets(&setup, 2, 1, &|_| {}).unwrap();
+    assert!(reports.iter().all(|r| r.loss.is_finite()));
+    // The whole domain dark is out of reach, and says by how much.
+    let all = Target::parse("kind = \"blue-noise\"\nradius = 1e6\n").unwrap();
+    let e = all.grid(64).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("reachable fraction"), "{e}");
+}
+
+#[test]
+fn same_seed_same_bits_whatever_the_thread_count() {
+    let target = Target::load(&shipped("double-wedge.toml")).unwrap();
+    let setup = Setup {
+        target,
+        n: 32,
+        dims: 4,
+        strata: Strata::default(),
+        repulsion: DEFAULT_REPULSION,
+        method: Method::Exact,
+        limits: Limits {
+            max_iters: 60,
+            max_seconds: 600.0,
+            tol: 0.0,
+        },
+    };
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| optimize_sets(&setup, 3, 9, &|_| {}).unwrap().0)
+    };
+    assert_eq!(run(1), run(2));
+}

@@ -57,10 +57,14 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = 1.0)]
     pub strat_weight: f64,
     /// Repulsion radius in units of the mean spacing 1/sqrt(N) (0 switches repulsion off).
-    #[arg(long, default_value_t = 0.4)]
+    #[arg(long, default_value_t = 0.25)]
     pub repulsion_radius: f64,
+    /// Draw the starting sets from this sampler (e.g. mj, jittered; see `anisospec samplers`)
+    /// instead of uniform random points. Stratified starts keep their dark axes.
+    #[arg(long)]
+    pub init: Option<String>,
     /// Repulsion strength.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 0.1)]
     pub repulsion_weight: f64,
 }
 
@@ -89,11 +93,8 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
             args.tol
         )));
     }
-    if !args.exact && !(1e-14..=1e-1).contains(&args.eps) {
-        return Err(Error::Usage(format!(
-            "--eps {}: the NUFFT tolerance must lie in [1e-14, 1e-1]",
-            args.eps
-        )));
+    if !args.exact {
+        Method::nufft(args.eps)?;
     }
     if !(args.strat_radius.is_finite() && args.strat_radius >= 0.0) {
         return Err(Error::Usage(format!(
@@ -142,6 +143,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             max_seconds: args.max_seconds,
             tol: args.tol,
         },
+        init: args.init.clone(),
     };
     let objective = setup.objective()?;
     let bar = if std::io::stderr().is_terminal() {
@@ -181,7 +183,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             "n": args.n, "dims": args.dims, "sets": args.sets, "seed": args.seed,
             "method": if args.exact { "exact".to_string() } else { format!("nufft eps={}", args.eps) },
             "strata": setup.strata, "repulsion": { "radius": setup.repulsion.radius, "weight": setup.repulsion.weight },
-            "limits": setup.limits,
+            "limits": setup.limits, "init": setup.init,
             "grid_res": objective.terms.iter().map(|t| t.grid.res).collect::<Vec<_>>(),
         },
         "final_loss": {

@@ -78,14 +78,14 @@ pub fn fit(points: &PointSets, proj: Projection, grid: &TargetGrid, method: Meth
     // Only whole annuli: r + ½ ≤ fit radius.
     let bins = (grid.fit_radius - 0.5).floor().max(0.0) as usize;
     let mut acc = vec![(0.0f64, 0.0f64, 0usize); bins + 1];
-    for idx in 0..res * res {
+    for (idx, pk) in p.iter().enumerate() {
         if grid.weight[idx] == 0.0 || grid.dark[idx] {
             continue;
         }
         let (k1, k2) = ((idx % res) as f64 - half, (idx / res) as f64 - half);
         let r = k1.hypot(k2).round() as usize;
         if r <= bins {
-            acc[r].0 += p[idx];
+            acc[r].0 += pk;
             acc[r].1 += grid.target[idx];
             acc[r].2 += 1;
         }

@@ -63,18 +63,27 @@ pub struct Setup {
     pub method: Method,
     /// Stopping rules.
     pub limits: Limits,
+    /// The sampler the starts are drawn from (a name for [`crate::samplers::build`]), or `None` for
+    /// uniform random starts. A stratified start (e.g. `mj`) begins with dark axes, which a target
+    /// around the `k1` axis keeps and widens; random starts end in poorer local minima.
+    pub init: Option<String>,
 }
 
-/// Default repulsion: radius 0.4 of the mean spacing, strength 1.
+/// Default repulsion: radius 0.25 of the mean spacing, strength 0.1. Stronger or wider repulsion
+/// raises a blue-noise peak near `|k| ≈ sqrt(N)` that the flat part of a target does not want
+/// (measured: radius 0.4, strength 1 left an annular error of 0.17 at `ν ≈ 0.6` on the double wedge).
 pub const DEFAULT_REPULSION: Repulsion = Repulsion {
-    radius: 0.4,
-    weight: 1.0,
+    radius: 0.25,
+    weight: 0.1,
 };
 
 impl Setup {
     /// The objective: the target on `xy` (2D) or on `xu` and `yv` plus the strata on `xy` and `uv`
     /// (4D). Fails for bad dims, N, or a target out of reach.
     pub fn objective(&self) -> Result<Objective> {
+        if let Method::Nufft { eps } = self.method {
+            Method::nufft(eps)?;
+        }
         let grid = self.target.grid(self.n)?;
         let terms = match self.dims {
             2 => vec![Term {
@@ -264,8 +273,8 @@ pub fn optimize_set(
     Ok((out.set, report))
 }
 
-/// Optimizes `sets` sets from uniform random starts, in parallel; set `s` draws its start from
-/// `rng::stream(seed, s)`, so the result does not depend on the thread count (as long as the time limit
+/// Optimizes `sets` sets in parallel from starts drawn from `setup.init` (uniform random if `None`);
+/// set `s` draws its start from `rng::stream(seed, s)`, so the result does not depend on the thread count (as long as the time limit
 /// does not bind). `on_done` is called once per finished set (e.g. to advance a progress bar).
 pub fn optimize_sets(
     setup: &Setup,
@@ -279,13 +288,24 @@ pub fn optimize_sets(
         ));
     }
     let objective = setup.objective()?;
+    let init = match &setup.init {
+        Some(name) => {
+            let sampler = crate::samplers::build(name, setup.dims)?;
+            crate::samplers::validate_n(sampler.as_ref(), setup.n)?;
+            Some(sampler)
+        }
+        None => None,
+    };
     let results: Vec<Result<(Vec<f64>, SetReport)>> = (0..sets)
         .into_par_iter()
         .map(|s| {
             let mut rng = rng::stream(seed, s as u64);
-            let start: Vec<f64> = (0..setup.n * setup.dims)
-                .map(|_| rng.random::<f64>())
-                .collect();
+            let start: Vec<f64> = match &init {
+                Some(sampler) => sampler.generate(setup.n, &mut rng),
+                None => (0..setup.n * setup.dims)
+                    .map(|_| rng.random::<f64>())
+                    .collect(),
+            };
             let r = optimize_set(&objective, &start, &setup.limits, s, &mut rng);
             if let Ok((_, rep)) = &r {
                 on_done(rep);

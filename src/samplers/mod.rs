@@ -10,6 +10,7 @@ pub mod grid;
 pub mod lowdisc;
 pub mod oa;
 pub mod pmj;
+pub mod table;
 
 pub use compose::{Paired, Pairing, Sheared};
 
@@ -213,6 +214,9 @@ pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
         return Err(Error::Usage(format!(
             "--dims {dims} is not supported; samplers make 2D (x,y) or 4D (x,y,u,v) sets"
         )));
+    }
+    if let Some(pattern) = name.strip_prefix("table:") {
+        return Ok(Box::new(table::Table::load(pattern, dims)?));
     }
     if dims == 2 {
         if let Some(s) = build_2d(name) {

@@ -29,7 +29,7 @@ pub const DARK_LEVEL: f64 = 0.05;
 
 /// The default weight of the dark region's mean squared error relative to the rest (see
 /// [`TargetGrid::weight`]).
-pub const DEFAULT_DARK_WEIGHT: f64 = 4.0;
+pub const DEFAULT_DARK_WEIGHT: f64 = 8.0;
 
 /// A widened hairline: dark within perpendicular distance `half_width * sqrt(N)` of the line
 /// `k2 = shear * k1` up to `|k| = length * sqrt(N)`, and inside the disc `|k| < inner_radius * sqrt(N)`.

@@ -5,6 +5,7 @@
 //! npy, EXR, PNG and CSV.
 
 pub mod cli;
+pub mod compare;
 pub mod converge;
 pub mod error;
 pub mod integrands;

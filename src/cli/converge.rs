@@ -3,7 +3,6 @@
 use crate::converge::{converge, plot, write_csv, ConvergeConfig, Convergence};
 use crate::error::{Error, Result};
 use crate::integrands::parse;
-use crate::samplers;
 use std::path::PathBuf;
 
 /// Measure MSE(N) over independent, randomly shifted realizations, and fit the convergence slope.
@@ -28,6 +27,13 @@ pub struct ConvergeArgs {
     /// then taken against each placement's own integral.
     #[arg(long)]
     pub random_placement: bool,
+    /// Shear every (4D) sampler by sx in xu and sy in yv (written sx,sy), e.g. the oracle's shear of
+    /// the integrand; the toroidal shift moves the pattern before it is sheared.
+    #[arg(long, value_parser = crate::cli::parse_shear, allow_hyphen_values = true)]
+    pub shear: Option<(f64, f64)>,
+    /// How --shear is applied: transported (seam-free, default) or wrap.
+    #[arg(long, value_parser = crate::cli::parse_shear_mode, default_value = "transported")]
+    pub shear_mode: crate::points::shear::ShearMode,
     /// Write the results as CSV (sampler, integrand, n, mse, mse_stderr, mean_error, seconds,
     /// evaluations, slope, slope_ci_low, slope_ci_high).
     #[arg(short = 'o', long)]
@@ -59,7 +65,8 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         .sampler
         .iter()
         .map(|name| {
-            let s = samplers::build(name.trim(), f.dims())?;
+            let s =
+                crate::cli::sampler_with_shear(name.trim(), f.dims(), args.shear, args.shear_mode)?;
             crate::converge::check_plan(s.as_ref(), f.as_ref(), &args.n, args.realizations)?;
             Ok(s)
         })

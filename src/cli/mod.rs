@@ -1,5 +1,6 @@
 //! The command-line front end: one module per subcommand, each a clap `Args` struct and a `run`.
 
+pub mod compare;
 pub mod converge;
 pub mod gallery;
 pub mod integrands;

@@ -9,7 +9,12 @@ use std::path::Path;
 
 /// Writes float channels (each `width * height` values, top row first) as an EXR image.
 /// Channel names follow EXR custom: `Y` for one value per pixel, `R`, `G`, `B` for colour.
-pub fn write_exr(path: &Path, width: usize, height: usize, channels: &[(&str, Vec<f32>)]) -> Result<()> {
+pub fn write_exr(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: &[(&str, Vec<f32>)],
+) -> Result<()> {
     use exr::prelude::*;
     let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
         .iter()
@@ -31,14 +36,26 @@ pub fn write_exr(path: &Path, width: usize, height: usize, channels: &[(&str, Ve
 }
 
 /// Writes an 8-bit PNG, grey (`channels = 1`) or RGB (`channels = 3`), top row first.
-pub fn write_png(path: &Path, width: usize, height: usize, channels: usize, pixels: &[u8]) -> Result<()> {
-    let colour = if channels == 3 { png::ColorType::Rgb } else { png::ColorType::Grayscale };
+pub fn write_png(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: usize,
+    pixels: &[u8],
+) -> Result<()> {
+    let colour = if channels == 3 {
+        png::ColorType::Rgb
+    } else {
+        png::ColorType::Grayscale
+    };
     write_atomic(path, |w| {
         let mut enc = png::Encoder::new(w, width as u32, height as u32);
         enc.set_color(colour);
         enc.set_depth(png::BitDepth::Eight);
         let mut writer = enc.write_header().map_err(std::io::Error::other)?;
-        writer.write_image_data(pixels).map_err(std::io::Error::other)?;
+        writer
+            .write_image_data(pixels)
+            .map_err(std::io::Error::other)?;
         writer.finish().map_err(std::io::Error::other)
     })
 }
@@ -79,6 +96,9 @@ pub fn write_spectrum_png(path: &Path, values: &[f64], res: usize) -> Result<()>
 
 /// Writes a spectrum as a one-channel (`Y`) EXR with the raw values, largest `k2` on top.
 pub fn write_spectrum_exr(path: &Path, values: &[f64], res: usize) -> Result<()> {
-    let rows: Vec<f32> = spectrum_image_rows(values, res).iter().map(|&v| v as f32).collect();
+    let rows: Vec<f32> = spectrum_image_rows(values, res)
+        .iter()
+        .map(|&v| v as f32)
+        .collect();
     write_exr(path, res, res, &[("Y", rows)])
 }

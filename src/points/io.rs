@@ -99,7 +99,9 @@ fn parse_text(text: &str) -> Result<PointSets> {
             }
             _ => {}
         }
-        sets.last_mut().expect("one set is always open").extend(coords);
+        sets.last_mut()
+            .expect("one set is always open")
+            .extend(coords);
     }
     if sets.last().is_some_and(Vec::is_empty) {
         sets.pop();

@@ -119,7 +119,10 @@ mod tests {
             let expect = (m * m / 16) as f64;
             for c in counts {
                 // Each coarse cell holds (m/4)^2 points up to a boundary strip of O(m) points.
-                assert!((c as f64 - expect).abs() < 4.0 * m as f64, "s={s}: {c} vs {expect}");
+                assert!(
+                    (c as f64 - expect).abs() < 4.0 * m as f64,
+                    "s={s}: {c} vs {expect}"
+                );
             }
             // t is monotone in a: the first coordinate's stratification carries over.
             assert!(ts.windows(2).all(|w| w[1] >= w[0]));
@@ -128,7 +131,10 @@ mod tests {
 
     #[test]
     fn zero_shear_is_identity() {
-        assert_eq!(shear_pair(0.3, 0.7, 0.0, ShearMode::Transported), (0.3, 0.7));
+        assert_eq!(
+            shear_pair(0.3, 0.7, 0.0, ShearMode::Transported),
+            (0.3, 0.7)
+        );
         assert_eq!(shear_pair(0.3, 0.7, 0.0, ShearMode::Wrap), (0.3, 0.7));
     }
 }

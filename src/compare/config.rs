@@ -1,0 +1,183 @@
+//! What `anisospec compare` runs: samplers, integrands, sizes and realizations. Built-in presets
+//! (a small default and a paper-scale `--full`) or a strict TOML file.
+
+use crate::error::{Error, Result};
+use crate::points::shear::ShearMode;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// An analytic 4D integrand of the suite.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnalyticEntry {
+    /// Name in the report, e.g. `hairline edge`.
+    pub label: String,
+    /// Integrand spec (see `anisospec integrands`), 4D, e.g. `sheared:s=0.5@xu*sheared:s=0.5@yv`.
+    pub spec: String,
+    /// The shear `(sx, sy)` an exact oracle gives for it (the centre of its shear range for a fan).
+    pub shear: [f64; 2],
+    /// The range of shears it holds, `[s_min, s_max]` (equal for a single edge); a double-wedge table
+    /// is built for this range.
+    pub shear_range: [f64; 2],
+}
+
+/// The whole study.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CompareConfig {
+    /// Points per pixel / estimate.
+    pub ns: Vec<usize>,
+    /// Realizations per N (each an independent set with a random toroidal shift).
+    pub realizations: usize,
+    /// Seed of every random choice.
+    pub seed: u64,
+    /// Classical 4D samplers, used as they are (see `anisospec samplers`).
+    pub classical: Vec<String>,
+    /// 4D samplers sheared by each integrand's oracle shear, once per mode in `shear_modes`.
+    pub sheared: Vec<String>,
+    /// How the oracle's shear is applied to `sheared`.
+    pub shear_modes: Vec<ShearMode>,
+    /// Optimized tables: target files, built for each N when missing from the cache.
+    pub tables: Vec<PathBuf>,
+    /// Sets per optimized table (each use picks one and shifts it at random).
+    pub table_sets: usize,
+    /// Optimizer time limit per set, seconds.
+    pub table_seconds: f64,
+    /// Analytic integrands.
+    pub analytic: Vec<AnalyticEntry>,
+    /// Renderer pixel classes to include, one pixel each: any of `in-focus`, `hairline`,
+    /// `double-wedge`.
+    pub pixel_classes: Vec<String>,
+    /// Rays per pixel reference.
+    pub pixel_reference_count: usize,
+    /// Relative errors put on the oracle's shear for the robustness study, e.g. -0.25, 0.1.
+    pub oracle_errors: Vec<f64>,
+    /// Spectra gallery: points, grid side and realizations.
+    pub spectra_n: usize,
+    /// Frequency grid side K of the gallery.
+    pub spectra_res: usize,
+    /// Realizations of each gallery spectrum.
+    pub spectra_realizations: usize,
+}
+
+impl CompareConfig {
+    /// The built-in default: small enough for a few minutes on 2 cores.
+    pub fn default_suite() -> Self {
+        Self {
+            ns: vec![16, 64, 256],
+            realizations: 128,
+            seed: 1,
+            classical: [
+                "padded-jittered",
+                "padded-mj",
+                "sobol",
+                "padded-pmj02",
+                "oa",
+            ]
+            .map(String::from)
+            .to_vec(),
+            sheared: vec!["padded-mj".into(), "sobol".into()],
+            shear_modes: vec![ShearMode::Transported, ShearMode::Wrap],
+            tables: vec![
+                PathBuf::from("targets/hairline.toml"),
+                PathBuf::from("targets/double-wedge.toml"),
+            ],
+            table_sets: 8,
+            table_seconds: 10.0,
+            analytic: vec![
+                AnalyticEntry {
+                    label: "hairline edge in xu".into(),
+                    spec: "sheared:s=0.5@xu".into(),
+                    shear: [0.5, 0.5],
+                    shear_range: [0.5, 0.5],
+                },
+                AnalyticEntry {
+                    label: "double-wedge fan in xu".into(),
+                    spec: "fan:s0=0.3,s1=0.7@xu".into(),
+                    shear: [0.5, 0.5],
+                    shear_range: [0.3, 0.7],
+                },
+                AnalyticEntry {
+                    label: "hairline edges in xu and yv".into(),
+                    spec: "sheared:s=0.5@xu*sheared:s=0.5@yv".into(),
+                    shear: [0.5, 0.5],
+                    shear_range: [0.5, 0.5],
+                },
+            ],
+            pixel_classes: ["in-focus", "hairline", "double-wedge"]
+                .map(String::from)
+                .to_vec(),
+            pixel_reference_count: 1 << 18,
+            oracle_errors: vec![-0.25, -0.1, 0.1, 0.25],
+            spectra_n: 256,
+            spectra_res: 64,
+            spectra_realizations: 32,
+        }
+    }
+
+    /// The paper-scale study: N from 16 to 4096 and more realizations.
+    pub fn full_suite() -> Self {
+        Self {
+            ns: vec![16, 64, 256, 1024, 4096],
+            realizations: 1000,
+            table_sets: 64,
+            table_seconds: 60.0,
+            pixel_reference_count: 1 << 22,
+            spectra_n: 1024,
+            spectra_res: 128,
+            spectra_realizations: 128,
+            ..Self::default_suite()
+        }
+    }
+
+    /// Reads a TOML config; unknown keys, missing keys and bad values are input errors.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io("read", path, e))?;
+        let config: Self =
+            toml::from_str(&text).map_err(|e| Error::Input(format!("{}: {e}", path.display())))?;
+        config.validate().map_err(|e| match e {
+            Error::Usage(m) | Error::Input(m) => Error::Input(format!("{}: {m}", path.display())),
+            other => other,
+        })?;
+        Ok(config)
+    }
+
+    /// Checks sizes and names that would otherwise fail mid-run.
+    pub fn validate(&self) -> Result<()> {
+        if self.ns.len() < 2 || self.ns.contains(&0) {
+            return Err(Error::Usage(
+                "ns needs at least two positive sizes for a slope, e.g. ns = [16, 64, 256]".into(),
+            ));
+        }
+        if self.realizations < 2 {
+            return Err(Error::Usage(
+                "realizations must be at least 2 for a standard error".into(),
+            ));
+        }
+        for c in &self.pixel_classes {
+            if !["in-focus", "hairline", "double-wedge"].contains(&c.as_str()) {
+                return Err(Error::Usage(format!(
+                    "pixel class '{c}' is unknown; use in-focus, hairline or double-wedge"
+                )));
+            }
+        }
+        if self
+            .oracle_errors
+            .iter()
+            .any(|e| !e.is_finite() || *e <= -1.0)
+        {
+            return Err(Error::Usage(
+                "oracle_errors are relative errors of the shear, finite and above -1 (e.g. -0.25, 0.1)".into(),
+            ));
+        }
+        for e in &self.analytic {
+            if e.shear_range[0] > e.shear_range[1] {
+                return Err(Error::Usage(format!(
+                    "{}: shear_range [{}, {}] has s_min > s_max",
+                    e.label, e.shear_range[0], e.shear_range[1]
+                )));
+            }
+        }
+        Ok(())
+    }
+}

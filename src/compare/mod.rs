@@ -1,0 +1,354 @@
+//! `anisospec compare`: optimized, sheared and classical samplers side by side on analytic integrands
+//! and on renderer pixels picked by the oracle's classes, with variance, slope and time — the answer to
+//! "which sampler, for which pixels, how much it gains, and what it costs".
+//!
+//! Every sampler goes through the same convergence engine ([`crate::converge::measure`]): each
+//! estimate is an independent set with a random toroidal shift, its error taken against the
+//! integrand's exact integral or cached reference.
+
+pub mod config;
+pub mod report;
+pub mod tables;
+
+use crate::converge::{fit_power_law, measure, ConvergeConfig, ConvergePoint, SlopeFit};
+use crate::error::{Error, Result};
+use crate::integrands::{self, Integrand};
+use crate::points::shear::ShearMode;
+use crate::render::oracle::{oracle_image, PixelClass};
+use crate::render::pixel::PixelIntegrand;
+use crate::render::scene::Scene;
+use crate::samplers::{self, Sampler, Sheared};
+use config::CompareConfig;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// One integrand of the study, with what the oracle says of it.
+pub struct Subject {
+    /// Name in the report.
+    pub label: String,
+    /// `analytic`, or the pixel class (`in-focus`, `hairline`, `double-wedge`).
+    pub class: String,
+    /// The integrand.
+    pub integrand: Arc<dyn Integrand>,
+    /// The oracle's shear `(sx, sy)`.
+    pub shear: (f64, f64),
+    /// The range of shears the integrand holds.
+    pub shear_range: (f64, f64),
+}
+
+/// What the report says of a subject.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SubjectInfo {
+    /// Name in the report.
+    pub label: String,
+    /// `analytic`, or the pixel class.
+    pub class: String,
+    /// The oracle's shear `(sx, sy)`.
+    pub shear: (f64, f64),
+    /// The range of shears the integrand holds.
+    pub shear_range: (f64, f64),
+}
+
+/// How a sampler of the study is made for a subject.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SamplerSpec {
+    /// A registry sampler, used as it is.
+    Classical(String),
+    /// A registry sampler sheared by the subject's oracle shear.
+    Sheared(String, ShearMode),
+    /// An optimized table built from a target file.
+    Table(PathBuf),
+}
+
+impl SamplerSpec {
+    /// The name in the report.
+    pub fn label(&self) -> String {
+        match self {
+            Self::Classical(n) => n.clone(),
+            Self::Sheared(n, ShearMode::Transported) => format!("{n} sheared (transported)"),
+            Self::Sheared(n, ShearMode::Wrap) => format!("{n} sheared (wrap)"),
+            Self::Table(p) => format!("optimized {}", stem(p)),
+        }
+    }
+
+    /// `classical`, `sheared` or `optimized`.
+    pub fn family(&self) -> &'static str {
+        match self {
+            Self::Classical(_) => "classical",
+            Self::Sheared(..) => "sheared",
+            Self::Table(_) => "optimized",
+        }
+    }
+}
+
+fn stem(p: &Path) -> String {
+    p.file_stem().map_or_else(
+        || p.display().to_string(),
+        |s| s.to_string_lossy().into_owned(),
+    )
+}
+
+/// The samplers of a config, in report order.
+pub fn sampler_specs(config: &CompareConfig) -> Vec<SamplerSpec> {
+    let mut specs: Vec<SamplerSpec> = config
+        .classical
+        .iter()
+        .cloned()
+        .map(SamplerSpec::Classical)
+        .collect();
+    for name in &config.sheared {
+        for &mode in &config.shear_modes {
+            specs.push(SamplerSpec::Sheared(name.clone(), mode));
+        }
+    }
+    specs.extend(config.tables.iter().cloned().map(SamplerSpec::Table));
+    specs
+}
+
+/// Builds the sampler `spec` for a subject whose oracle shear is `shear` and whose shears span
+/// `range`, at `n` points. Also returns the one-off set-up time in seconds (a table's optimization,
+/// as recorded when it was built; 0 for the others).
+pub fn instantiate(
+    spec: &SamplerSpec,
+    shear: (f64, f64),
+    range: (f64, f64),
+    n: usize,
+    tables: &tables::TableCache,
+) -> Result<(Box<dyn Sampler>, f64)> {
+    match spec {
+        SamplerSpec::Classical(name) => Ok((samplers::build(name, 4)?, 0.0)),
+        SamplerSpec::Sheared(name, mode) => Ok((
+            Box::new(Sheared::new(
+                samplers::build(name, 4)?,
+                shear.0,
+                shear.1,
+                *mode,
+            )?),
+            0.0,
+        )),
+        SamplerSpec::Table(target) => tables.sampler(target, shear, range, n),
+    }
+}
+
+/// `n` if the sampler allows it, else its nearest valid N.
+pub fn usable_n(sampler: &dyn Sampler, n: usize) -> usize {
+    sampler.check_n(n).map_or_else(|nearest| nearest, |_| n)
+}
+
+/// The measured convergence of one sampler on one subject.
+#[derive(Clone, Debug)]
+pub struct Study {
+    /// Subject label.
+    pub subject: String,
+    /// Subject class.
+    pub class: String,
+    /// Sampler label.
+    pub sampler: String,
+    /// Sampler family.
+    pub family: &'static str,
+    /// One point per N of the config (N may be the sampler's nearest valid N).
+    pub points: Vec<ConvergePoint>,
+    /// `MSE ∝ N^slope`.
+    pub fit: Option<SlopeFit>,
+    /// One-off set-up time (table optimization), seconds.
+    pub setup_seconds: f64,
+}
+
+/// The robustness of one sampler to an error of the oracle's shear, at the largest N.
+#[derive(Clone, Debug)]
+pub struct Robustness {
+    /// Subject label.
+    pub subject: String,
+    /// Sampler label.
+    pub sampler: String,
+    /// Relative error put on the shear (0 = exact oracle).
+    pub error: f64,
+    /// The measurement.
+    pub point: ConvergePoint,
+}
+
+/// Everything a compare run measured.
+pub struct Outcome {
+    /// The config that ran.
+    pub config: CompareConfig,
+    /// Subjects, in order.
+    pub subjects: Vec<SubjectInfo>,
+    /// Studies, subject-major.
+    pub studies: Vec<Study>,
+    /// Robustness rows.
+    pub robustness: Vec<Robustness>,
+    /// Wall time of the whole run, seconds.
+    pub seconds: f64,
+}
+
+/// The analytic subjects and one pixel per requested class of the default scene.
+pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>> {
+    let mut out = Vec::new();
+    for a in &config.analytic {
+        let f: Arc<dyn Integrand> = Arc::from(integrands::parse(&a.spec)?);
+        if f.dims() != 4 {
+            return Err(Error::Usage(format!(
+                "{}: '{}' is {}D; compare runs 4D integrands (place 2D ones with @xu, @yv, ...)",
+                a.label,
+                a.spec,
+                f.dims()
+            )));
+        }
+        out.push(Subject {
+            label: a.label.clone(),
+            class: "analytic".into(),
+            integrand: f,
+            shear: (a.shear[0], a.shear[1]),
+            shear_range: (a.shear_range[0], a.shear_range[1]),
+        });
+    }
+    if config.pixel_classes.is_empty() {
+        return Ok(out);
+    }
+    let scene = Arc::new(Scene::load(None)?);
+    let oracle = oracle_image(&scene)?;
+    let (w, h) = (scene.width(), scene.height());
+    for class in &config.pixel_classes {
+        // The pixel of that class nearest the image centre.
+        let pick = oracle
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.class.name() == class)
+            .min_by(|(i, _), (j, _)| {
+                let d = |k: usize| {
+                    let (x, y) = (
+                        (k % w) as f64 - w as f64 / 2.0,
+                        (k / w) as f64 - h as f64 / 2.0,
+                    );
+                    x * x + y * y
+                };
+                d(*i).total_cmp(&d(*j))
+            });
+        let Some((i, o)) = pick else {
+            return Err(Error::Numerical(format!(
+                "the default scene has no {class} pixel; drop it from pixel_classes"
+            )));
+        };
+        let (px, py) = (i % w, i / w);
+        let f = PixelIntegrand::new(scene.clone(), px, py)?
+            .with_ref_count(config.pixel_reference_count)?
+            .with_cache_dir(Some(cache_dir.to_path_buf()));
+        let centre = if o.class == PixelClass::DoubleWedge {
+            0.5 * (o.s_min + o.s_max)
+        } else {
+            o.sx
+        };
+        out.push(Subject {
+            label: format!("{class} pixel ({px},{py})"),
+            class: class.clone(),
+            integrand: Arc::new(f),
+            shear: (centre, centre),
+            shear_range: (o.s_min, o.s_max),
+        });
+    }
+    Ok(out)
+}
+
+fn fit(points: &[ConvergePoint]) -> Option<SlopeFit> {
+    let n: Vec<f64> = points.iter().map(|p| p.n as f64).collect();
+    let v: Vec<f64> = points.iter().map(|p| p.mse).collect();
+    let se: Vec<f64> = points.iter().map(|p| p.mse_stderr).collect();
+    fit_power_law(&n, &v, &se).ok()
+}
+
+/// Runs the study and writes the report folder `out`.
+pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outcome> {
+    config.validate()?;
+    let started = Instant::now();
+    let subjects = subjects(config, cache_dir)?;
+    let specs = sampler_specs(config);
+    let tables = tables::TableCache::new(config, cache_dir);
+    let cfg = ConvergeConfig {
+        realizations: config.realizations,
+        seed: config.seed,
+        random_placement: false,
+    };
+    let bar = crate::progress::bar((subjects.len() * specs.len()) as u64, "compare");
+    let mut studies = Vec::new();
+    for s in &subjects {
+        for spec in &specs {
+            let mut points = Vec::new();
+            let mut setup = 0.0;
+            for &n in &config.ns {
+                let (sampler, seconds) = instantiate(spec, s.shear, s.shear_range, n, &tables)?;
+                setup += seconds;
+                let n = usable_n(sampler.as_ref(), n);
+                points.push(measure(sampler.as_ref(), s.integrand.as_ref(), n, &cfg)?);
+            }
+            studies.push(Study {
+                subject: s.label.clone(),
+                class: s.class.clone(),
+                sampler: spec.label(),
+                family: spec.family(),
+                fit: fit(&points),
+                points,
+                setup_seconds: setup,
+            });
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+    let robustness = robustness(config, &subjects, &specs, &tables, &cfg)?;
+    let outcome = Outcome {
+        config: config.clone(),
+        subjects: subjects
+            .iter()
+            .map(|s| SubjectInfo {
+                label: s.label.clone(),
+                class: s.class.clone(),
+                shear: s.shear,
+                shear_range: s.shear_range,
+            })
+            .collect(),
+        studies,
+        robustness,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    report::write(&outcome, &specs, &tables, out)?;
+    Ok(outcome)
+}
+
+/// The samplers that follow the oracle (sheared and optimized), on the subjects that have a shear,
+/// with the oracle's shear scaled by `1 + e` for every error `e` (and `e = 0`), at the largest N.
+/// Tables keep the shape built for the subject's true shear range; the error moves them.
+fn robustness(
+    config: &CompareConfig,
+    subjects: &[Subject],
+    specs: &[SamplerSpec],
+    tables: &tables::TableCache,
+    cfg: &ConvergeConfig,
+) -> Result<Vec<Robustness>> {
+    let n = *config.ns.iter().max().expect("validated: ns is not empty");
+    let mut errors = vec![0.0];
+    errors.extend(config.oracle_errors.iter().copied());
+    let mut rows = Vec::new();
+    for s in subjects
+        .iter()
+        .filter(|s| s.shear.0.abs() + s.shear.1.abs() > 0.0)
+    {
+        for spec in specs.iter().filter(|sp| sp.family() != "classical") {
+            if matches!(spec, SamplerSpec::Sheared(_, ShearMode::Wrap)) {
+                continue;
+            }
+            for &e in &errors {
+                let shear = (s.shear.0 * (1.0 + e), s.shear.1 * (1.0 + e));
+                // A table keeps the shape built for the true range; only the shear moving it is wrong.
+                let (sampler, _) = instantiate(spec, shear, s.shear_range, n, tables)?;
+                let n = usable_n(sampler.as_ref(), n);
+                rows.push(Robustness {
+                    subject: s.label.clone(),
+                    sampler: spec.label(),
+                    error: e,
+                    point: measure(sampler.as_ref(), s.integrand.as_ref(), n, cfg)?,
+                });
+            }
+        }
+    }
+    Ok(rows)
+}

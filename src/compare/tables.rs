@@ -1,0 +1,156 @@
+//! Optimized tables for the compare study: built for each target, shear range and N when missing,
+//! cached when present.
+//!
+//! Tables are designed in the unsheared frame — a widened hairline around the `k1` axis, a double
+//! wedge symmetric about it, as wide as the subject's shear range — and moved at use by the oracle's
+//! centre shear with the seam-free (transported) shear, which carries a pattern direction of slope `a`
+//! to slope `s + a`. One table then serves every depth, and the pattern never wraps across the pixel
+//! boundary (the seam that defeats the wrap-around shear, DESIGN §5).
+
+use super::config::CompareConfig;
+use crate::error::Result;
+use crate::optimize::{optimize_sets, Limits, Setup, Strata, DEFAULT_REPULSION};
+use crate::points::io::write_points;
+use crate::points::shear::ShearMode;
+use crate::samplers::table::Table;
+use crate::samplers::{Sampler, Sheared};
+use crate::spectrum::Method;
+use crate::targets::Target;
+use std::path::{Path, PathBuf};
+
+/// The narrowest double wedge a table is built for: half-width 0.05 in slope, for subjects whose shear
+/// range is (nearly) a single shear.
+pub const MIN_WEDGE_HALF_WIDTH: f64 = 0.05;
+
+/// Optimizer iterations per set: the binding limit, so a table does not depend on machine speed.
+pub const TABLE_ITERATIONS: u64 = 300;
+
+/// Where tables are cached and how they are built.
+pub struct TableCache {
+    dir: PathBuf,
+    sets: usize,
+    seconds: f64,
+    seed: u64,
+}
+
+/// The target moved into the unsheared frame for a subject whose shears span `range`.
+pub fn unsheared_frame(target: Target, range: (f64, f64)) -> Target {
+    match target {
+        Target::Hairline(mut h) => {
+            h.shear = 0.0;
+            Target::Hairline(h)
+        }
+        Target::DoubleWedge(mut w) => {
+            let half = (0.5 * (range.1 - range.0)).max(MIN_WEDGE_HALF_WIDTH);
+            w.s0 = -half;
+            w.s1 = half;
+            Target::DoubleWedge(w)
+        }
+        other => other,
+    }
+}
+
+/// The target, with its dark region shrunk in steps of 10 % in extent until `n` points can reach it
+/// (a shipped target is sized for N of a few hundred; at N = 16 its dark area may exceed the N cells
+/// that 2N degrees of freedom can darken, DESIGN §6).
+pub fn within_reach(mut target: Target, n: usize) -> Result<Target> {
+    for _ in 0..40 {
+        match target.grid(n) {
+            Ok(_) => return Ok(target),
+            Err(e) => match &mut target {
+                Target::Hairline(h) => {
+                    h.length *= 0.9;
+                    h.inner_radius *= 0.9;
+                }
+                Target::DoubleWedge(w) => {
+                    w.radius *= 0.9;
+                    w.inner_radius *= 0.9;
+                }
+                _ => return Err(e),
+            },
+        }
+    }
+    target.grid(n).map(|_| target)
+}
+
+/// FNV-1a, 64 bits: a cache key that stays the same across builds and platforms.
+fn fnv1a(text: &str) -> u64 {
+    text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+impl TableCache {
+    /// Tables of `config.table_sets` sets, cached under `cache_dir/tables`.
+    pub fn new(config: &CompareConfig, cache_dir: &Path) -> Self {
+        Self {
+            dir: cache_dir.join("tables"),
+            sets: config.table_sets,
+            seconds: config.table_seconds,
+            seed: config.seed,
+        }
+    }
+
+    /// The sampler of `target` at `n` points for a subject with oracle shear `shear` and shear range
+    /// `range`, and the seconds its table took to optimize (when it was built, cached or not).
+    pub fn sampler(
+        &self,
+        target: &Path,
+        shear: (f64, f64),
+        range: (f64, f64),
+        n: usize,
+    ) -> Result<(Box<dyn Sampler>, f64)> {
+        let framed = within_reach(unsheared_frame(Target::load(target)?, range), n)?;
+        let (path, seconds) = self.table(target, &framed, n)?;
+        let table = Table::load(&path.to_string_lossy(), 4)?;
+        let sampler = Sheared::new(Box::new(table), shear.0, shear.1, ShearMode::Transported)?;
+        Ok((Box::new(sampler), seconds))
+    }
+
+    /// The cached table's file, optimized and written first if missing, and its optimization time.
+    fn table(&self, source: &Path, target: &Target, n: usize) -> Result<(PathBuf, f64)> {
+        let key = format!(
+            "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|v1",
+            self.sets, self.seed
+        );
+        let stem = source
+            .file_stem()
+            .map_or_else(|| "table".into(), |s| s.to_string_lossy().into_owned());
+        let path = self
+            .dir
+            .join(format!("{stem}_n{n}_{:016x}.npy", fnv1a(&key)));
+        let meta = path.with_extension("json");
+        if let (true, Ok(text)) = (path.is_file(), std::fs::read_to_string(&meta)) {
+            if let Ok(m) = serde_json::from_str::<serde_json::Value>(&text) {
+                if m["key"] == key {
+                    return Ok((path, m["seconds"].as_f64().unwrap_or(0.0)));
+                }
+            }
+        }
+        let setup = Setup {
+            target: target.clone(),
+            n,
+            dims: 4,
+            strata: Strata::default(),
+            repulsion: DEFAULT_REPULSION,
+            method: Method::Nufft { eps: 1e-8 },
+            limits: Limits {
+                max_iters: TABLE_ITERATIONS,
+                max_seconds: self.seconds,
+                tol: 1e-6,
+            },
+            // A multi-jittered start begins with dark axes, which the unsheared-frame targets keep.
+            init: crate::samplers::grid::mj_shape(n).map(|_| "xuyv-mj".to_string()),
+        };
+        let started = std::time::Instant::now();
+        let (points, _) = optimize_sets(&setup, self.sets, self.seed, &|_| {})?;
+        let seconds = started.elapsed().as_secs_f64();
+        write_points(&path, &points)?;
+        let sidecar = serde_json::json!({ "key": key, "seconds": seconds, "target": source.display().to_string() });
+        crate::output::write_atomic(&meta, |w| {
+            use std::io::Write;
+            writeln!(w, "{sidecar:#}")
+        })?;
+        Ok((path, seconds))
+    }
+}

@@ -64,8 +64,8 @@ impl CompareConfig {
     /// The built-in default: small enough for a few minutes on 2 cores.
     pub fn default_suite() -> Self {
         Self {
-            ns: vec![16, 64, 256],
-            realizations: 128,
+            ns: vec![16, 64, 256, 1024],
+            realizations: 256,
             seed: 1,
             classical: [
                 "padded-jittered",
@@ -82,7 +82,7 @@ impl CompareConfig {
                 PathBuf::from("targets/hairline.toml"),
                 PathBuf::from("targets/double-wedge.toml"),
             ],
-            table_sets: 8,
+            table_sets: 16,
             table_seconds: 10.0,
             analytic: vec![
                 AnalyticEntry {

@@ -249,3 +249,15 @@ fn output_never_clobbers_input() {
     assert_eq!(o.status.code(), Some(2));
     assert_eq!(std::fs::read(&input).unwrap(), before);
 }
+
+#[test]
+fn compare_rejects_a_bad_config_before_any_work() {
+    let (dir, config) = tmp("study.toml");
+    let out = dir.path().join("report");
+    std::fs::write(&config, "ns = [16, 64]\nrealisations = 10\n").unwrap();
+    let o = out.to_str().unwrap();
+    let c = config.to_str().unwrap();
+    rejects(&["compare", "--config", c, "--out", o], "realisations", &out);
+    std::fs::write(&config, "ns = [16]\n").unwrap();
+    rejects(&["compare", "--config", c, "--out", o], "study.toml", &out);
+}

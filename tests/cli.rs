@@ -257,7 +257,11 @@ fn compare_rejects_a_bad_config_before_any_work() {
     std::fs::write(&config, "ns = [16, 64]\nrealisations = 10\n").unwrap();
     let o = out.to_str().unwrap();
     let c = config.to_str().unwrap();
-    rejects(&["compare", "--config", c, "--out", o], "realisations", &out);
+    rejects(
+        &["compare", "--config", c, "--out", o],
+        "realisations",
+        &out,
+    );
     std::fs::write(&config, "ns = [16]\n").unwrap();
     rejects(&["compare", "--config", c, "--out", o], "study.toml", &out);
 }

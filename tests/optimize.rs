@@ -212,6 +212,7 @@ fn shipped_targets_fit_at_256() {
         ("double-wedge.toml", false),
         ("blue-noise.toml", true),
         ("image-ellipse.toml", true),
+        ("hairline-dark.toml", false),
     ] {
         let target = Target::load(&shipped(name)).unwrap();
         let setup = Setup {

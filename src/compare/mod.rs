@@ -10,7 +10,7 @@ pub mod config;
 pub mod report;
 pub mod tables;
 
-use crate::converge::{fit_power_law, measure, ConvergeConfig, ConvergePoint, SlopeFit};
+use crate::converge::{fit_points, measure, ConvergeConfig, ConvergePoint, SlopeFit};
 use crate::error::{Error, Result};
 use crate::integrands::{self, Integrand};
 use crate::points::shear::ShearMode;
@@ -250,13 +250,6 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
     Ok(out)
 }
 
-fn fit(points: &[ConvergePoint]) -> Option<SlopeFit> {
-    let n: Vec<f64> = points.iter().map(|p| p.n as f64).collect();
-    let v: Vec<f64> = points.iter().map(|p| p.mse).collect();
-    let se: Vec<f64> = points.iter().map(|p| p.mse_stderr).collect();
-    fit_power_law(&n, &v, &se).ok()
-}
-
 /// Runs the study and writes the report folder `out`.
 pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outcome> {
     config.validate()?;
@@ -286,7 +279,7 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
                 class: s.class.clone(),
                 sampler: spec.label(),
                 family: spec.family(),
-                fit: fit(&points),
+                fit: fit_points(&points),
                 points,
                 setup_seconds: setup,
             });

@@ -176,7 +176,8 @@ pub fn converge(
     })
 }
 
-fn fit_points(points: &[ConvergePoint]) -> Option<SlopeFit> {
+/// `MSE ∝ N^slope` fitted through measured points (`None` with fewer than two N or a zero MSE).
+pub fn fit_points(points: &[ConvergePoint]) -> Option<SlopeFit> {
     let n: Vec<f64> = points.iter().map(|p| p.n as f64).collect();
     let v: Vec<f64> = points.iter().map(|p| p.mse).collect();
     let se: Vec<f64> = points.iter().map(|p| p.mse_stderr).collect();

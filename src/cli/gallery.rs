@@ -6,7 +6,7 @@ use crate::error::Result;
 use crate::output::sheet::{write_sheet, Panel};
 use crate::output::write_atomic;
 use crate::points::Projection;
-use crate::samplers::{self, Sampler};
+use crate::samplers::{self, usable_n};
 use crate::spectrum::expected::of_sampler;
 use crate::spectrum::profiles::{radial_profile, write_radial_csv};
 use crate::spectrum::{check_res, Method};
@@ -134,9 +134,4 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
     })?;
     eprintln!("gallery written to {}", index.display());
     Ok(())
-}
-
-/// `n` if the sampler allows it, else its nearest valid N.
-fn usable_n(sampler: &dyn Sampler, n: usize) -> usize {
-    sampler.check_n(n).map_or_else(|nearest| nearest, |_| n)
 }

@@ -17,6 +17,7 @@ use crate::points::shear::ShearMode;
 use crate::render::oracle::{oracle_image, PixelClass};
 use crate::render::pixel::PixelIntegrand;
 use crate::render::scene::Scene;
+pub use crate::samplers::usable_n;
 use crate::samplers::{self, Sampler, Sheared};
 use config::CompareConfig;
 use std::path::{Path, PathBuf};
@@ -129,11 +130,6 @@ pub fn instantiate(
         )),
         SamplerSpec::Table(target) => tables.sampler(target, shear, range, n),
     }
-}
-
-/// `n` if the sampler allows it, else its nearest valid N.
-pub fn usable_n(sampler: &dyn Sampler, n: usize) -> usize {
-    sampler.check_n(n).map_or_else(|nearest| nearest, |_| n)
 }
 
 /// The measured convergence of one sampler on one subject.

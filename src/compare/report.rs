@@ -3,6 +3,7 @@
 
 use super::tables::TableCache;
 use super::{instantiate, usable_n, Outcome, SamplerSpec, Study, SubjectInfo};
+use crate::converge::{plot, Convergence};
 use crate::error::Result;
 use crate::output::plot::{write_loglog_png, LogLogPlot, Series};
 use crate::output::sheet::{write_sheet, Panel};
@@ -146,25 +147,19 @@ fn slope_text(s: &Study) -> String {
 }
 
 fn write_convergence_plot(path: &Path, label: &str, studies: &[&Study], r: usize) -> Result<()> {
-    let series = studies
+    let curves: Vec<Convergence> = studies
         .iter()
-        .map(|s| Series {
-            label: format!("{}: slope {}", s.sampler, slope_text(s)),
-            points: s.points.iter().map(|p| (p.n as f64, p.mse)).collect(),
-            errors: Some(s.points.iter().map(|p| p.mse_stderr).collect()),
-            dashed: false,
+        .map(|s| Convergence {
+            sampler: s.sampler.clone(),
+            integrand: s.subject.clone(),
+            points: s.points.clone(),
+            fit: s.fit,
         })
         .collect();
-    write_loglog_png(
+    plot(
         path,
-        &LogLogPlot {
-            title: format!("{label}: MSE against N ({r} realizations per point)"),
-            x_label: "N (samples per estimate)".into(),
-            y_label: "MSE (squared integrand units)".into(),
-            series,
-            width: 1000,
-            height: 700,
-        },
+        &curves,
+        &format!("{label}: MSE against N ({r} realizations per point)"),
     )
 }
 

@@ -265,11 +265,11 @@ pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Res
         path,
         &LogLogPlot {
             title: title.to_string(),
-            x_label: "N (samples)".into(),
-            y_label: "mean squared error".into(),
+            x_label: "N (samples per estimate)".into(),
+            y_label: "MSE (squared integrand units)".into(),
             series,
-            width: 900,
-            height: 650,
+            width: 1000,
+            height: 700,
         },
     )
 }

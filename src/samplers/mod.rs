@@ -51,7 +51,7 @@ pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
         return Err(Error::Usage(format!(
             "-n 0 asks for no points; {} needs at least one (try -n {})",
             sampler.name(),
-            nearest_or_one(sampler, 1)
+            usable_n(sampler, 1)
         )));
     }
     sampler.check_n(n).map_err(|nearest| {
@@ -62,7 +62,8 @@ pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
     })
 }
 
-fn nearest_or_one(sampler: &dyn Sampler, n: usize) -> usize {
+/// `n` if the sampler allows it, else its nearest valid N.
+pub fn usable_n(sampler: &dyn Sampler, n: usize) -> usize {
     sampler.check_n(n).map_or_else(|m| m, |_| n)
 }
 

@@ -42,6 +42,7 @@ fn setup(n: usize, dims: usize, max_iters: u64) -> Setup {
             tol: 1e-6,
         },
         init: None,
+        latin: false,
     }
 }
 
@@ -85,9 +86,15 @@ fn speed_against_error() {
             let s = setup(n, dims, budget);
             let obj = s.objective().expect("objective");
             let t0 = Instant::now();
-            let (_, rep) =
-                optimize_set(&obj, &start(n, dims), &s.limits, 0, &mut rng::stream(1, 1))
-                    .expect("optimize");
+            let (_, rep) = optimize_set(
+                &obj,
+                &start(n, dims),
+                &s.limits,
+                false,
+                0,
+                &mut rng::stream(1, 1),
+            )
+            .expect("optimize");
             println!(
                 "{dims:>4} {n:>6} {budget:>8} {:>8} {:>10.2} {:>12.4e} {:>12.4e}",
                 rep.iterations,
@@ -223,6 +230,7 @@ fn table(target: &str, n: usize, sets: usize) -> anisospec::points::PointSets {
             tol: 1e-6,
         },
         init: Some("mj".into()),
+        latin: false,
     };
     anisospec::optimize::optimize_sets(&s, sets, 7, &|_| {})
         .expect("optimize")

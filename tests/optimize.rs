@@ -93,6 +93,7 @@ fn gradient_matches_finite_differences_for_every_target_kind() {
                 method: Method::Exact,
                 limits: Limits::default(),
                 init: None,
+                latin: false,
             };
             let obj = setup.objective().unwrap();
             let mut r = rng::stream(77, (t * 10 + dims) as u64);
@@ -129,6 +130,7 @@ fn nufft_gradient_matches_exact_gradient() {
             method: Method::Exact,
             limits: Limits::default(),
             init: None,
+            latin: false,
         };
         let exact = setup.objective().unwrap();
         setup.method = Method::Nufft { eps: 1e-9 };
@@ -228,6 +230,7 @@ fn shipped_targets_fit_at_256() {
                 tol: 1e-6,
             },
             init: None,
+            latin: false,
         };
         let obj = setup.objective().unwrap();
         let (pts, reports) = optimize_sets(&setup, sets, 2024, &|_| {}).unwrap();
@@ -279,7 +282,8 @@ fn degenerate_starts_end_in_a_finite_report() {
     let dup: Vec<f64> = half.iter().chain(half.iter()).copied().collect();
     let same: Vec<f64> = (0..n).flat_map(|_| [0.25, 0.75]).collect();
     for (name, start) in [("one cell", cell), ("duplicates", dup), ("all equal", same)] {
-        let (set, rep) = optimize_set(&obj, &start, &limits, 0, &mut rng::stream(6, 0)).unwrap();
+        let (set, rep) =
+            optimize_set(&obj, &start, &limits, false, 0, &mut rng::stream(6, 0)).unwrap();
         assert!(
             set.iter().all(|c| c.is_finite() && (0.0..1.0).contains(c)),
             "{name}"
@@ -320,6 +324,7 @@ fn extreme_targets_end_in_a_clear_report() {
             tol: 1e-6,
         },
         init: None,
+        latin: false,
     };
     let (_, reports) = optimize_sets(&setup, 2, 1, &|_| {}).unwrap();
     assert!(reports.iter().all(|r| r.loss.is_finite()));
@@ -346,6 +351,7 @@ fn same_seed_same_bits_whatever_the_thread_count() {
             tol: 0.0,
         },
         init: None,
+        latin: false,
     };
     let run = |threads| {
         rayon::ThreadPoolBuilder::new()

@@ -63,6 +63,11 @@ pub struct OptimizeArgs {
     /// instead of uniform random points. Stratified starts keep their dark axes.
     #[arg(long)]
     pub init: Option<String>,
+    /// Keep the first coordinate N-stratified (2D: the first; 4D: x and y): one point per interval
+    /// [s/N, (s+1)/N). Its k1 axis then stays dark up to N, as N-rooks' does, beyond the loss's
+    /// frequency grid. Use it for tables applied with the transported shear (hairline, double wedge)
+    #[arg(long)]
+    pub latin: bool,
     /// Repulsion strength.
     #[arg(long, default_value_t = 0.1)]
     pub repulsion_weight: f64,
@@ -144,6 +149,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             tol: args.tol,
         },
         init: args.init.clone(),
+        latin: args.latin,
     };
     let objective = setup.objective()?;
     let bar = if std::io::stderr().is_terminal() {

@@ -141,6 +141,7 @@ impl TableCache {
             },
             // A multi-jittered start begins with dark axes, which the unsheared-frame targets keep.
             init: crate::samplers::grid::mj_shape(n).map(|_| "xuyv-mj".to_string()),
+            latin: true,
         };
         let started = std::time::Instant::now();
         let (points, _) = optimize_sets(&setup, self.sets, self.seed, &|_| {})?;

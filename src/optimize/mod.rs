@@ -12,6 +12,7 @@
 //! and `uv` are kept stratified by a blue-noise dark-disc target.
 
 pub mod fourier;
+pub mod latin;
 pub mod loss;
 pub mod metrics;
 pub mod solver;
@@ -67,6 +68,10 @@ pub struct Setup {
     /// uniform random starts. A stratified start (e.g. `mj`) begins with dark axes, which a target
     /// around the `k1` axis keeps and widens; random starts end in poorer local minima.
     pub init: Option<String>,
+    /// Keep the first coordinate of each targeted pair N-stratified (2D: the first coordinate; 4D:
+    /// `x` and `y`), see [`latin`]: the `k1` axis of the target's projections then stays dark up to
+    /// `N`, far beyond the loss's grid. The pattern frame of a sheared edge needs it.
+    pub latin: bool,
 }
 
 /// Default repulsion: radius 0.25 of the mean spacing, strength 0.1. Stronger or wider repulsion
@@ -84,7 +89,10 @@ impl Setup {
         if let Method::Nufft { eps } = self.method {
             Method::nufft(eps)?;
         }
-        let grid = self.target.grid(self.n)?;
+        // Under the Latin constraint the first coordinate's axis is dark by construction; the
+        // target must not ask for anything else there.
+        let axes = [self.latin, false];
+        let grid = self.target.grid_with_axes(self.n, axes)?;
         let terms = match self.dims {
             2 => vec![Term {
                 proj: Projection::XY,
@@ -95,9 +103,11 @@ impl Setup {
                 let strata = Target::BlueNoise(BlueNoise {
                     radius: self.strata.radius,
                     dark_weight: None,
+                    falloff: None,
                 });
                 strata.validate()?;
                 let sg = strata.grid(self.n)?;
+                let sg_xy = strata.grid_with_axes(self.n, [self.latin, self.latin])?;
                 let mut t = vec![
                     Term {
                         proj: Projection::XU,
@@ -111,10 +121,10 @@ impl Setup {
                     },
                 ];
                 if self.strata.weight > 0.0 {
-                    for proj in [Projection::XY, Projection::UV] {
+                    for (proj, grid) in [(Projection::XY, sg_xy), (Projection::UV, sg)] {
                         t.push(Term {
                             proj,
-                            grid: sg.clone(),
+                            grid,
                             weight: self.strata.weight,
                         });
                     }
@@ -223,12 +233,24 @@ pub fn separate_duplicates(objective: &Objective, set: &mut [f64], rng: &mut Rng
     moved.iter().filter(|&&m| m).count()
 }
 
-/// Optimizes one set from `start` (`[n, dims]`, in `[0,1)`). `rng` breaks ties between duplicate
-/// points. Fails with `Error::Numerical` if the start's loss is not finite.
+/// The coordinates a Latin constraint keeps N-stratified: the first of each targeted pair (2D: the
+/// first coordinate; 4D: `x` of `xu` and `y` of `yv`).
+pub fn latin_coords(dims: usize) -> Vec<usize> {
+    if dims == 4 {
+        vec![Projection::XU.a, Projection::YV.a]
+    } else {
+        vec![0]
+    }
+}
+
+/// Optimizes one set from `start` (`[n, dims]`, in `[0,1)`), with the Latin constraint of
+/// [`latin`] on [`latin_coords`] if `latin`. `rng` breaks ties between duplicate points. Fails with
+/// `Error::Numerical` if the start's loss is not finite.
 pub fn optimize_set(
     objective: &Objective,
     start: &[f64],
     limits: &Limits,
+    latin: bool,
     index: usize,
     rng: &mut Rng,
 ) -> Result<(Vec<f64>, SetReport)> {
@@ -255,7 +277,39 @@ pub fn optimize_set(
             check.loss
         )));
     }
-    let out = solver::minimize(objective, &set, limits);
+    let mut out = solver::minimize(objective, &set, limits, None);
+    if latin {
+        // Stratify the first coordinates, then polish the others with those held (see `latin`).
+        let (n, dims) = (objective.n, objective.dims);
+        let coords = latin_coords(dims);
+        let mut stratified = out.set.clone();
+        latin::stratify(&mut stratified, n, dims, &coords, rng);
+        let polish = solver::minimize(
+            objective,
+            &stratified,
+            limits,
+            Some(&latin::frozen(n, dims, &coords)),
+        );
+        out = solver::Outcome {
+            initial: out.initial,
+            iterations: out.iterations + polish.iterations,
+            evaluations: out.evaluations + polish.evaluations,
+            seconds: out.seconds + polish.seconds,
+            stop: format!("free: {}; stratified polish: {}", out.stop, polish.stop),
+            fallback_used: out.fallback_used || polish.fallback_used,
+            log: out
+                .log
+                .into_iter()
+                .chain(polish.log.into_iter().map(|row| LogRow {
+                    iter: row.iter + out.iterations,
+                    seconds: row.seconds + out.seconds,
+                    ..row
+                }))
+                .collect(),
+            set: polish.set,
+            last: polish.last,
+        };
+    }
     let report = SetReport {
         set: index,
         initial_loss: out.initial.loss,
@@ -306,7 +360,7 @@ pub fn optimize_sets(
                     .map(|_| rng.random::<f64>())
                     .collect(),
             };
-            let r = optimize_set(&objective, &start, &setup.limits, s, &mut rng);
+            let r = optimize_set(&objective, &start, &setup.limits, setup.latin, s, &mut rng);
             if let Ok((_, rep)) = &r {
                 on_done(rep);
             }

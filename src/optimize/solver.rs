@@ -75,9 +75,29 @@ pub struct Outcome {
     pub log: Vec<LogRow>,
 }
 
+/// The objective with some coordinates held fixed: their gradient is zero, so no solver moves them.
+struct Variables<'a> {
+    objective: &'a Objective,
+    frozen: Option<&'a [bool]>,
+}
+
+impl Variables<'_> {
+    fn evaluate(&self, set: &[f64]) -> Evaluation {
+        let mut e = self.objective.evaluate(set);
+        if let Some(mask) = self.frozen {
+            for (g, &f) in e.gradient.iter_mut().zip(mask) {
+                if f {
+                    *g = 0.0;
+                }
+            }
+        }
+        e
+    }
+}
+
 /// The argmin view of an objective: cost and gradient share one evaluation through a cache.
 struct Problem<'a> {
-    objective: &'a Objective,
+    objective: &'a Variables<'a>,
     cache: Mutex<Option<(Vec<f64>, Evaluation)>>,
     evaluations: Arc<AtomicU64>,
 }
@@ -217,9 +237,17 @@ fn run_round(
 /// gains less than `limits.tol` (relative), or at the iteration or time limit. A round in which
 /// L-BFGS fails (a non-finite value, a failed line search) is redone with steepest descent. The
 /// returned loss is always finite: a start whose loss is not finite is an error for the caller.
-pub fn minimize(objective: &Objective, start: &[f64], limits: &Limits) -> Outcome {
+///
+/// Coordinates where `frozen` (`[n, dims]`) is `true` keep their start values.
+pub fn minimize(
+    objective: &Objective,
+    start: &[f64],
+    limits: &Limits,
+    frozen: Option<&[bool]>,
+) -> Outcome {
     let t0 = Instant::now();
     let rows = Arc::new(Mutex::new(Vec::new()));
+    let objective = &Variables { objective, frozen };
     let initial = objective.evaluate(start);
     let mut best = (start.to_vec(), initial.clone());
     let mut iterations = 0u64;

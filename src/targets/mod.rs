@@ -31,8 +31,9 @@ pub const DARK_LEVEL: f64 = 0.05;
 /// [`TargetGrid::weight`]).
 pub const DEFAULT_DARK_WEIGHT: f64 = 8.0;
 
-/// A widened hairline: dark within perpendicular distance `half_width * sqrt(N)` of the line
-/// `k2 = shear * k1` up to `|k| = length * sqrt(N)`, and inside the disc `|k| < inner_radius * sqrt(N)`.
+/// A widened hairline: dark within perpendicular distance `(half_width + opening · |k| / sqrt(N)) *
+/// sqrt(N)` of the line `k2 = shear * k1` up to `|k| = length * sqrt(N)`, and inside the disc
+/// `|k| < inner_radius * sqrt(N)`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Hairline {
@@ -40,6 +41,11 @@ pub struct Hairline {
     pub shear: f64,
     /// Half-width of the dark band, in units of `sqrt(N)` frequency cells (0: a hairline).
     pub half_width: f64,
+    /// How fast the band opens: its half-width at `|k| = ρ sqrt(N)` is `half_width + opening · ρ`, so
+    /// a line of slope within `±opening` of `shear` (an oracle shear error) stays inside it (default 0:
+    /// a band of constant width).
+    #[serde(default)]
+    pub opening: f64,
     /// How far the band reaches, in units of `sqrt(N)`.
     pub length: f64,
     /// Radius of the dark disc around the origin, in units of `sqrt(N)`.
@@ -48,6 +54,10 @@ pub struct Hairline {
     /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
     #[serde(default)]
     pub dark_weight: Option<f64>,
+    /// Exponent `α` of a low-frequency emphasis inside the dark region and its rim: cell `k` weighs
+    /// in proportion to `|k|^(−α)` there (default 0: uniform; see [`TargetGrid::weight`]).
+    #[serde(default)]
+    pub falloff: Option<f64>,
 }
 
 /// A double wedge: dark between the lines `k2 = s0 k1` and `k2 = s1 k1` up to `|k| = radius * sqrt(N)`,
@@ -67,6 +77,10 @@ pub struct DoubleWedge {
     /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
     #[serde(default)]
     pub dark_weight: Option<f64>,
+    /// Exponent `α` of a low-frequency emphasis inside the dark region and its rim: cell `k` weighs
+    /// in proportion to `|k|^(−α)` there (default 0: uniform; see [`TargetGrid::weight`]).
+    #[serde(default)]
+    pub falloff: Option<f64>,
 }
 
 /// Isotropic blue noise: dark inside the disc `|k| < radius * sqrt(N)`.
@@ -78,6 +92,10 @@ pub struct BlueNoise {
     /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
     #[serde(default)]
     pub dark_weight: Option<f64>,
+    /// Exponent `α` of a low-frequency emphasis inside the dark region and its rim: cell `k` weighs
+    /// in proportion to `|k|^(−α)` there (default 0: uniform; see [`TargetGrid::weight`]).
+    #[serde(default)]
+    pub falloff: Option<f64>,
 }
 
 /// A target read from a 2D npy image of `T` values (`float64` or `float32`, shape `[rows, cols]`).
@@ -96,6 +114,10 @@ pub struct Image {
     /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
     #[serde(default)]
     pub dark_weight: Option<f64>,
+    /// Exponent `α` of a low-frequency emphasis inside the dark region and its rim: cell `k` weighs
+    /// in proportion to `|k|^(−α)` there (default 0: uniform; see [`TargetGrid::weight`]).
+    #[serde(default)]
+    pub falloff: Option<f64>,
     /// The pixel values, row-major, filled in by [`Target::load`].
     #[serde(skip)]
     pub pixels: Vec<f64>,
@@ -173,6 +195,17 @@ fn dark_weight(w: Option<f64>) -> Result<f64> {
     Ok(w)
 }
 
+fn falloff(a: Option<f64>) -> Result<f64> {
+    let a = a.unwrap_or(0.0);
+    finite("falloff", a)?;
+    if !(0.0..=4.0).contains(&a) {
+        return Err(Error::Input(format!(
+            "target parameter 'falloff' is {a}; it is an exponent of |k| and must lie in [0, 4]"
+        )));
+    }
+    Ok(a)
+}
+
 impl Target {
     /// Reads and checks a target file. Unknown keys, non-finite numbers, negative widths and radii,
     /// `s0 > s1` and unreadable images are errors (`Error::Input`) naming the problem.
@@ -210,9 +243,11 @@ impl Target {
             Target::Hairline(h) => {
                 finite("shear", h.shear)?;
                 non_negative("half_width", h.half_width)?;
+                non_negative("opening", h.opening)?;
                 non_negative("length", h.length)?;
                 non_negative("inner_radius", h.inner_radius)?;
                 dark_weight(h.dark_weight)?;
+                falloff(h.falloff)?;
             }
             Target::DoubleWedge(d) => {
                 finite("s0", d.s0)?;
@@ -226,10 +261,12 @@ impl Target {
                 non_negative("radius", d.radius)?;
                 non_negative("inner_radius", d.inner_radius)?;
                 dark_weight(d.dark_weight)?;
+                falloff(d.falloff)?;
             }
             Target::BlueNoise(b) => {
                 non_negative("radius", b.radius)?;
                 dark_weight(b.dark_weight)?;
+                falloff(b.falloff)?;
             }
             Target::Image(i) => {
                 non_negative("extent", i.extent)?;
@@ -239,6 +276,7 @@ impl Target {
                     ));
                 }
                 dark_weight(i.dark_weight)?;
+                falloff(i.falloff)?;
             }
         }
         Ok(())
@@ -274,6 +312,16 @@ impl Target {
         w.unwrap_or(DEFAULT_DARK_WEIGHT)
     }
 
+    fn falloff(&self) -> f64 {
+        let a = match self {
+            Target::Hairline(h) => h.falloff,
+            Target::DoubleWedge(d) => d.falloff,
+            Target::BlueNoise(b) => b.falloff,
+            Target::Image(i) => i.falloff,
+        };
+        a.unwrap_or(0.0)
+    }
+
     /// `T` at the normalized frequency `(ν1, ν2) = k / sqrt(N)`.
     pub fn value(&self, nu1: f64, nu2: f64) -> f64 {
         let r = nu1.hypot(nu2);
@@ -281,7 +329,7 @@ impl Target {
             Target::Hairline(h) => {
                 // Perpendicular distance from (ν1, ν2) to the line ν2 = s ν1.
                 let dist = (nu2 - h.shear * nu1).abs() / h.shear.hypot(1.0);
-                (dist <= h.half_width && r <= h.length) || r < h.inner_radius
+                (dist <= h.half_width + h.opening * r && r <= h.length) || r < h.inner_radius
             }
             Target::DoubleWedge(d) => {
                 let inside = nu1 != 0.0 && {
@@ -307,11 +355,20 @@ impl Target {
     /// `Error::Input` when the dark region holds more than [`REACH`]` × N` cells, naming the reachable
     /// fraction.
     pub fn grid(&self, n: usize) -> Result<TargetGrid> {
+        self.grid_with_axes(n, [false, false])
+    }
+
+    /// Like [`Target::grid`], with the frequency axes flagged in `dark_axes` made dark as well:
+    /// `dark_axes[0]` darkens the `k1` axis (`k2 = 0`, the spectrum of the first coordinate alone),
+    /// `dark_axes[1]` the `k2` axis. For a set kept N-stratified in that coordinate (the Latin
+    /// constraint of the optimizer), whose axis is dark up to `N` anyway: a target value of 1 there
+    /// would make the optimizer raise it. These cells do not count against the reach.
+    pub fn grid_with_axes(&self, n: usize, dark_axes: [bool; 2]) -> Result<TargetGrid> {
         let sqrt_n = (n as f64).sqrt();
         let ext = self.extent() * sqrt_n;
         // Fit a margin around the features so the energy they push out is kept flat too.
         let fit_radius = (2.0 * ext).max(ext + sqrt_n).max(4.0);
-        self.grid_within(n, fit_radius)
+        self.grid_within(n, fit_radius, dark_axes)
     }
 
     /// The area of the dark region in normalized frequency, i.e. its expected number of frequency
@@ -319,7 +376,11 @@ impl Target {
     pub fn dark_area(&self) -> f64 {
         use std::f64::consts::PI;
         match self {
-            Target::Hairline(h) => 4.0 * h.half_width * h.length + PI * h.inner_radius.powi(2),
+            Target::Hairline(h) => {
+                4.0 * h.half_width * h.length
+                    + 2.0 * h.opening * h.length.powi(2)
+                    + PI * h.inner_radius.powi(2)
+            }
             Target::DoubleWedge(d) => {
                 (d.s1.atan() - d.s0.atan()) * d.radius.powi(2) + PI * d.inner_radius.powi(2)
             }
@@ -335,12 +396,17 @@ impl Target {
     /// just beyond the optimized range is seen.
     pub fn check_grid(&self, n: usize) -> Result<TargetGrid> {
         let fit = self.grid(n)?.fit_radius;
-        self.grid_within(n, 2.0 * fit)
+        self.grid_within(n, 2.0 * fit, [false, false])
     }
 
-    /// Like [`Target::grid`] but with the fit radius (in frequency cells) given: used to judge a fit
-    /// beyond the radius it was optimized over.
-    pub fn grid_within(&self, n: usize, fit_radius: f64) -> Result<TargetGrid> {
+    /// Like [`Target::grid_with_axes`] but with the fit radius (in frequency cells) given: used to
+    /// judge a fit beyond the radius it was optimized over.
+    pub fn grid_within(
+        &self,
+        n: usize,
+        fit_radius: f64,
+        dark_axes: [bool; 2],
+    ) -> Result<TargetGrid> {
         if n < 2 {
             return Err(Error::Usage(format!(
                 "-n {n}: an optimized set needs at least 2 points"
@@ -376,6 +442,14 @@ impl Target {
         if dark_cells as f64 > reach {
             return Err(self.beyond_reach(n, dark_cells as f64));
         }
+        for idx in 0..res * res {
+            let (k1, k2) = ((idx % res) as i64 - half, (idx / res) as i64 - half);
+            if inside[idx] && ((dark_axes[0] && k2 == 0) || (dark_axes[1] && k1 == 0)) {
+                target[idx] = 0.0;
+                dark[idx] = true;
+            }
+        }
+        let dark_cells = dark.iter().filter(|&&d| d).count();
         // The rim: non-dark cells next to a dark one (8-neighbourhood), where the energy pushed out of
         // the dark region piles up first. They get the dark cells' weight.
         let rim: Vec<bool> = (0..res * res)
@@ -397,13 +471,26 @@ impl Target {
             .collect();
         let rim_cells = rim.iter().filter(|&&r| r).count();
         let others = inside.iter().filter(|&&c| c).count() - dark_cells - rim_cells;
+        // Dark and rim cells share the weight `dark_weight` in proportion to `(|k| / sqrt(N))^(−α)`.
+        let alpha = self.falloff();
+        let emphasis = |idx: usize| {
+            let (k1, k2) = (
+                (idx % res) as f64 - half as f64,
+                (idx / res) as f64 - half as f64,
+            );
+            (k1.hypot(k2) / sqrt_n).powf(-alpha)
+        };
+        let dark_total: f64 = (0..res * res)
+            .filter(|&idx| dark[idx] || rim[idx])
+            .map(emphasis)
+            .sum();
         let wd = self.dark_weight();
         let weight = (0..res * res)
             .map(|idx| {
                 if !inside[idx] {
                     0.0
                 } else if dark[idx] || rim[idx] {
-                    wd / (dark_cells + rim_cells) as f64
+                    wd * emphasis(idx) / dark_total
                 } else {
                     1.0 / others.max(1) as f64
                 }

@@ -163,11 +163,11 @@ fn sheared_hairline_degrades_with_oracle_error() {
     }
 }
 
-/// The widened hairline keeps its gain where the sheared hairline loses it: on the xu edge of shear 0.5
-/// with the oracle's shear 10 % too large, the dark-weighted widened-hairline table (targets/
-/// hairline-dark.toml, moved by the same wrong shear) has a lower MSE than seam-free sheared padded MJ by
-/// more than 3 combined standard errors, while with the exact shear the sheared MJ hairline is the better
-/// one.
+/// The widened hairline keeps its gain where the sheared hairline loses it: on the xu edge of shear
+/// 0.5 with the oracle's shear 10 % too large, the widened-hairline table (targets/
+/// widened-hairline.toml, moved by the same wrong shear) has a lower MSE than seam-free sheared padded
+/// MJ by more than 3 combined standard errors, and the sheared MJ hairline is itself worse than with
+/// the exact shear by more than 3 (its gain is lost).
 #[test]
 fn widened_hairline_survives_oracle_error() {
     let dir = tempfile::tempdir().unwrap();
@@ -177,27 +177,137 @@ fn widened_hairline_survives_oracle_error() {
     let subject = &subjects(&cfg, dir.path()).unwrap()[0];
     assert_eq!(subject.label, "hairline edge in xu");
     let tables = TableCache::new(&cfg, dir.path());
-    let table = SamplerSpec::Table("targets/hairline-dark.toml".into());
+    let table = SamplerSpec::Table("targets/widened-hairline.toml".into());
     let hairline = SamplerSpec::Sheared("padded-mj".into(), ShearMode::Transported);
     let n = 1024;
-    let (t_exact, h_exact) = (
-        mse(&table, subject, n, 1.0, &tables),
-        mse(&hairline, subject, n, 1.0, &tables),
-    );
-    assert!(
-        z_below(&h_exact, &t_exact) > 3.0,
-        "exact shear: table {:.3e}, hairline {:.3e}",
-        t_exact.mse,
-        h_exact.mse
-    );
+    let h_exact = mse(&hairline, subject, n, 1.0, &tables);
     let (t_off, h_off) = (
         mse(&table, subject, n, 1.1, &tables),
         mse(&hairline, subject, n, 1.1, &tables),
     );
     let z = z_below(&t_off, &h_off);
     eprintln!(
-        "N={n}: exact shear table {:.3e} / hairline {:.3e}; +10 %: table {:.3e} ± {:.1e} / hairline {:.3e} ± {:.1e} (z = {z:.1})",
-        t_exact.mse, h_exact.mse, t_off.mse, t_off.mse_stderr, h_off.mse, h_off.mse_stderr
+        "N={n}: hairline exact {:.3e}; +10 %: table {:.3e} ± {:.1e} / hairline {:.3e} ± {:.1e} (z = {z:.1})",
+        h_exact.mse, t_off.mse, t_off.mse_stderr, h_off.mse, h_off.mse_stderr
     );
     assert!(z > 3.0);
+    assert!(z_below(&h_exact, &h_off) > 3.0);
+}
+
+/// The ratio `b / a` of two MSEs and its standard error (first-order propagation).
+fn gain(a: &ConvergePoint, b: &ConvergePoint) -> (f64, f64) {
+    let r = b.mse / a.mse;
+    let rel = ((a.mse_stderr / a.mse).powi(2) + (b.mse_stderr / b.mse).powi(2)).sqrt();
+    (r, r * rel)
+}
+
+/// Issue 5, widened hairline: on the xu edge of shear 0.5 with the oracle's shear off by ±5 % and
+/// ±20 %, the widened-hairline table (shipped target, 8 sets, moved by the wrong shear) against
+/// jittered sampling (unsheared: padded-jittered, and jittered on the xu plane itself, xuyv-jittered)
+/// and the transported-sheared hairlines (padded MJ, MJ on xu, N-rooks on xu) at N = 64, 256, 1024.
+///
+/// Asserted: the table beats both jittered samplers by more than 3 combined standard errors at every N
+/// and error; at N = 1024 it beats every sheared hairline by more than 3 as well, and its gain over
+/// jittered on the xu plane at ±5 % exceeds the goal of 5 by more than 2 standard errors of the
+/// ratio. Measured, not asserted: at N = 64 the hairlines are not broken yet by these errors and the
+/// table only ties them (0.8–1.1×); at N = 256 it gains 1.2–2.9× over them.
+#[test]
+fn widened_hairline_gains_under_oracle_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut cfg = config(&[]);
+    cfg.analytic = CompareConfig::default_suite().analytic[..1].to_vec();
+    cfg.table_sets = 8;
+    let subject = &subjects(&cfg, dir.path()).unwrap()[0];
+    let tables = TableCache::new(&cfg, dir.path());
+    let table = SamplerSpec::Table("targets/widened-hairline.toml".into());
+    let jittered = ["padded-jittered", "xuyv-jittered"].map(|s| SamplerSpec::Classical(s.into()));
+    let hairlines = ["padded-mj", "xuyv-mj", "xuyv-nrooks"]
+        .map(|s| SamplerSpec::Sheared(s.into(), ShearMode::Transported));
+    for n in [64, 256, 1024] {
+        let jit: Vec<ConvergePoint> = jittered
+            .iter()
+            .map(|j| mse(j, subject, n, 1.0, &tables))
+            .collect();
+        for error in [-0.2, -0.05, 0.05, 0.2] {
+            let t = mse(&table, subject, n, 1.0 + error, &tables);
+            let mut line = format!(
+                "N={n} error {error:+}: table {:.3e} ± {:.1e}",
+                t.mse, t.mse_stderr
+            );
+            let mut failures = Vec::new();
+            for (spec, p) in jittered.iter().zip(&jit) {
+                let (g, se) = gain(&t, p);
+                line += &format!(" | vs {} {g:.2}±{se:.2}", spec.label());
+                if z_below(&t, p) <= 3.0 {
+                    failures.push(spec.label());
+                }
+                if n == 1024
+                    && error.abs() == 0.05
+                    && spec.label() == "xuyv-jittered"
+                    && g - 2.0 * se <= 5.0
+                {
+                    failures.push(format!("5x goal over {}", spec.label()));
+                }
+            }
+            for h in &hairlines {
+                let p = mse(h, subject, n, 1.0 + error, &tables);
+                let (g, se) = gain(&t, &p);
+                line += &format!(" | vs {} {g:.2}±{se:.2}", h.label());
+                if n == 1024 && z_below(&t, &p) <= 3.0 {
+                    failures.push(h.label());
+                }
+            }
+            eprintln!("{line}");
+            assert!(failures.is_empty(), "{line}: not beaten: {failures:?}");
+        }
+    }
+}
+
+/// Issue 5, double wedge: on the fan of edges with shears in [0.3, 0.7] (its double wedge is the
+/// target's), the double-wedge table (shipped target, 8 sets, moved by the middle shear 0.5) against
+/// the classical samplers: jittered, Owen-scrambled Sobol and PMJ02 (padded, 4D, and on the xu plane
+/// itself) and transported-sheared MJ, at N = 64, 256, 1024.
+///
+/// Asserted: at N = 256 and 1024 the table beats every one of them by more than 3 combined standard
+/// errors. Not met: the goal of 3× over the best classical sampler at N = 1024 (measured 1.6× over
+/// sheared MJ on the xu plane, 2.0–2.6× over the Sobol and PMJ02 variants); at N = 64 the gain over
+/// sheared MJ on the xu plane (1.3×) is within 2 standard errors.
+#[test]
+fn double_wedge_gains_on_the_fan() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut cfg = config(&[]);
+    cfg.analytic = CompareConfig::default_suite().analytic[1..2].to_vec();
+    cfg.table_sets = 8;
+    let subject = &subjects(&cfg, dir.path()).unwrap()[0];
+    assert_eq!(subject.label, "double-wedge fan in xu");
+    let tables = TableCache::new(&cfg, dir.path());
+    let table = SamplerSpec::Table("targets/double-wedge.toml".into());
+    let mut classical: Vec<SamplerSpec> = [
+        "padded-jittered",
+        "xuyv-jittered",
+        "sobol",
+        "xuyv-sobol",
+        "padded-pmj02",
+        "xuyv-pmj02",
+    ]
+    .map(|s| SamplerSpec::Classical(s.into()))
+    .to_vec();
+    classical.extend(
+        ["padded-mj", "xuyv-mj"].map(|s| SamplerSpec::Sheared(s.into(), ShearMode::Transported)),
+    );
+    for n in [64, 256, 1024] {
+        let t = mse(&table, subject, n, 1.0, &tables);
+        let mut line = format!("N={n}: table {:.3e} ± {:.1e}", t.mse, t.mse_stderr);
+        let mut failures = Vec::new();
+        for c in &classical {
+            let p = mse(c, subject, n, 1.0, &tables);
+            let (g, se) = gain(&t, &p);
+            line += &format!(" | vs {} {g:.2}±{se:.2}", c.label());
+            if n >= 256 && z_below(&t, &p) <= 3.0 {
+                failures.push(c.label());
+            }
+        }
+        eprintln!("{line}");
+        assert!(failures.is_empty(), "{line}: not beaten: {failures:?}");
+    }
 }

@@ -47,6 +47,8 @@ fn all_target_kinds(dir: &Path) -> Vec<Target> {
     vec![
         Target::parse("kind = \"hairline\"\nshear = 0.5\nhalf_width = 0.1\nlength = 1.2\ninner_radius = 0.3\n").unwrap(),
         Target::parse("kind = \"double-wedge\"\ns0 = 0.3\ns1 = 0.7\nradius = 1.2\ninner_radius = 0.2\n").unwrap(),
+        Target::parse("kind = \"hairline\"\nshear = 0.0\nhalf_width = 0.06\nopening = 0.03\nlength = 1.5\nfalloff = 2\ndark_weight = 2000\n").unwrap(),
+        Target::parse("kind = \"double-wedge\"\ns0 = -0.2\ns1 = 0.2\nmargin = 0.05\nradius = 1.0\nfalloff = 2\n").unwrap(),
         Target::parse("kind = \"blue-noise\"\nradius = 0.45\n").unwrap(),
         image_target(dir),
     ]
@@ -162,6 +164,7 @@ fn target_files_are_strict() {
         "double-wedge.toml",
         "blue-noise.toml",
         "image-ellipse.toml",
+        "widened-hairline.toml",
     ] {
         let t = Target::load(&shipped(name)).unwrap();
         for n in [64, 256, 1024, 4096] {
@@ -183,6 +186,18 @@ fn target_files_are_strict() {
             "s0 = 0.7 > s1 = 0.3",
         ),
         ("kind = \"spiral\"\nradius = 1\n", "kind"),
+        (
+            "kind = \"double-wedge\"\ns0 = 0.3\ns1 = 0.7\nradius = 1\nmargin = -0.1\n",
+            "margin",
+        ),
+        (
+            "kind = \"hairline\"\nshear = 0\nhalf_width = 0.1\nlength = 1\nopening = -1\n",
+            "opening",
+        ),
+        (
+            "kind = \"blue-noise\"\nradius = 0.4\nfalloff = 9\n",
+            "falloff",
+        ),
     ];
     for (text, needle) in cases {
         let e = Target::parse(text).unwrap_err();
@@ -214,7 +229,7 @@ fn shipped_targets_fit_at_256() {
         ("double-wedge.toml", false),
         ("blue-noise.toml", true),
         ("image-ellipse.toml", true),
-        ("hairline-dark.toml", false),
+        ("widened-hairline.toml", false),
     ] {
         let target = Target::load(&shipped(name)).unwrap();
         let setup = Setup {
@@ -351,7 +366,7 @@ fn same_seed_same_bits_whatever_the_thread_count() {
             tol: 0.0,
         },
         init: None,
-        latin: false,
+        latin: true,
     };
     let run = |threads| {
         rayon::ThreadPoolBuilder::new()
@@ -360,5 +375,16 @@ fn same_seed_same_bits_whatever_the_thread_count() {
             .unwrap()
             .install(|| optimize_sets(&setup, 3, 9, &|_| {}).unwrap().0)
     };
-    assert_eq!(run(1), run(2));
+    let one = run(1);
+    assert_eq!(one, run(2));
+    // The Latin constraint held: x and y are N-stratified in every set.
+    for set in 0..3 {
+        for d in 0..2 {
+            let mut strata: Vec<usize> = (0..32)
+                .map(|j| (one.set(set)[j * 4 + d] * 32.0) as usize)
+                .collect();
+            strata.sort_unstable();
+            assert_eq!(strata, (0..32).collect::<Vec<_>>());
+        }
+    }
 }

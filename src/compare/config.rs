@@ -80,7 +80,7 @@ impl CompareConfig {
             shear_modes: vec![ShearMode::Transported, ShearMode::Wrap],
             tables: vec![
                 PathBuf::from("targets/hairline.toml"),
-                PathBuf::from("targets/hairline-dark.toml"),
+                PathBuf::from("targets/widened-hairline.toml"),
                 PathBuf::from("targets/double-wedge.toml"),
             ],
             table_sets: 16,

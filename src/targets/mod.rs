@@ -60,8 +60,8 @@ pub struct Hairline {
     pub falloff: Option<f64>,
 }
 
-/// A double wedge: dark between the lines `k2 = s0 k1` and `k2 = s1 k1` up to `|k| = radius * sqrt(N)`,
-/// and inside the disc `|k| < inner_radius * sqrt(N)`.
+/// A double wedge: dark between the lines `k2 = s0 k1` and `k2 = s1 k1`, and within `margin * sqrt(N)`
+/// of them, up to `|k| = radius * sqrt(N)`, and inside the disc `|k| < inner_radius * sqrt(N)`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DoubleWedge {
@@ -69,6 +69,11 @@ pub struct DoubleWedge {
     pub s0: f64,
     /// Upper slope.
     pub s1: f64,
+    /// Perpendicular distance, in units of `sqrt(N)`, by which the dark region reaches beyond the two
+    /// lines (default 0): an edge's spectrum is a line smeared by about one frequency cell across, so
+    /// the wedge's extreme edges need a margin.
+    #[serde(default)]
+    pub margin: f64,
     /// Radius of the wedge, in units of `sqrt(N)`.
     pub radius: f64,
     /// Radius of the dark disc around the origin, in units of `sqrt(N)`.
@@ -259,6 +264,7 @@ impl Target {
                     )));
                 }
                 non_negative("radius", d.radius)?;
+                non_negative("margin", d.margin)?;
                 non_negative("inner_radius", d.inner_radius)?;
                 dark_weight(d.dark_weight)?;
                 falloff(d.falloff)?;
@@ -332,10 +338,12 @@ impl Target {
                 (dist <= h.half_width + h.opening * r && r <= h.length) || r < h.inner_radius
             }
             Target::DoubleWedge(d) => {
-                let inside = nu1 != 0.0 && {
+                let near = |s: f64| (nu2 - s * nu1).abs() / s.hypot(1.0) <= d.margin;
+                let inside = (nu1 != 0.0 && {
                     let slope = nu2 / nu1;
                     slope >= d.s0 && slope <= d.s1
-                };
+                }) || near(d.s0)
+                    || near(d.s1);
                 (inside && r <= d.radius) || r < d.inner_radius
             }
             Target::BlueNoise(b) => r < b.radius,
@@ -382,7 +390,9 @@ impl Target {
                     + PI * h.inner_radius.powi(2)
             }
             Target::DoubleWedge(d) => {
-                (d.s1.atan() - d.s0.atan()) * d.radius.powi(2) + PI * d.inner_radius.powi(2)
+                (d.s1.atan() - d.s0.atan()) * d.radius.powi(2)
+                    + 4.0 * d.margin * d.radius
+                    + PI * d.inner_radius.powi(2)
             }
             Target::BlueNoise(b) => PI * b.radius.powi(2),
             Target::Image(i) => {

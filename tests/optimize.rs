@@ -388,3 +388,60 @@ fn same_seed_same_bits_whatever_the_thread_count() {
         }
     }
 }
+
+/// An EXR image target (top row at the highest frequency, as `anisospec spectrum` writes spectra)
+/// gives the same grid as the npy it was written from (row 0 lowest): the shipped tilted ellipse,
+/// which a wrong row order would mirror into the other tilt. A file that is not an EXR image is an
+/// input error naming it.
+#[test]
+fn exr_image_targets_match_npy() {
+    let npy = Target::load(&shipped("image-ellipse.toml")).unwrap();
+    let Target::Image(img) = &npy else {
+        panic!("image-ellipse.toml is an image target")
+    };
+    assert_eq!(img.shape[0], img.shape[1]);
+    let dir = tempfile::tempdir().unwrap();
+    anisospec::output::image::write_spectrum_exr(
+        &dir.path().join("e.exr"),
+        &img.pixels,
+        img.shape[0],
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("e.toml"),
+        format!(
+            "kind = \"image\"\nfile = \"e.exr\"\nextent = {}\n",
+            img.extent
+        ),
+    )
+    .unwrap();
+    let exr = Target::load(&dir.path().join("e.toml")).unwrap();
+    let (a, b) = (npy.grid(256).unwrap(), exr.grid(256).unwrap());
+    assert_eq!(a.dark, b.dark);
+    assert!(a
+        .target
+        .iter()
+        .zip(&b.target)
+        .all(|(x, y)| (x - y).abs() < 1e-6));
+    let mirrored: Vec<bool> = a
+        .dark
+        .chunks_exact(a.res)
+        .rev()
+        .flatten()
+        .copied()
+        .collect();
+    assert_ne!(
+        mirrored, a.dark,
+        "the test image must not be symmetric under a row flip"
+    );
+
+    std::fs::write(dir.path().join("bad.exr"), b"not an image").unwrap();
+    std::fs::write(
+        dir.path().join("bad.toml"),
+        "kind = \"image\"\nfile = \"bad.exr\"\nextent = 1\n",
+    )
+    .unwrap();
+    let e = Target::load(&dir.path().join("bad.toml")).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("bad.exr"), "{e}");
+}

@@ -35,6 +35,25 @@ pub fn write_exr(
     })
 }
 
+/// Reads one channel of the first layer of an EXR image: `Y` if there is one, else `R`, else the first
+/// channel, as `f64` values top row first, with `[height, width]`. Errors are the decoder's words.
+pub fn read_exr_channel(path: &Path) -> std::result::Result<(Vec<f64>, [usize; 2]), String> {
+    let image = exr::prelude::read_first_flat_layer_from_file(path).map_err(|e| e.to_string())?;
+    let layer = image.layer_data;
+    let channels = &layer.channel_data.list;
+    let pick = ["Y", "R"]
+        .iter()
+        .find_map(|want| channels.iter().find(|c| c.name.to_string() == *want))
+        .or_else(|| channels.first())
+        .ok_or("the image has no channel")?;
+    let values = pick
+        .sample_data
+        .values_as_f32()
+        .map(f64::from)
+        .collect::<Vec<_>>();
+    Ok((values, [layer.size.height(), layer.size.width()]))
+}
+
 /// Writes an 8-bit PNG, grey (`channels = 1`) or RGB (`channels = 3`), top row first.
 pub fn write_png(
     path: &Path,

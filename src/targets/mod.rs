@@ -103,7 +103,9 @@ pub struct BlueNoise {
     pub falloff: Option<f64>,
 }
 
-/// A target read from a 2D npy image of `T` values (`float64` or `float32`, shape `[rows, cols]`).
+/// A target read from an image of `T` values: a 2D npy array (`float64` or `float32`, shape
+/// `[rows, cols]`, row 0 lowest) or an EXR image (one channel, `Y`, `R` or the first; top row highest,
+/// the layout `anisospec spectrum -o FILE.exr` writes, so a measured spectrum can serve as a target).
 ///
 /// The image covers normalized frequencies `ν1, ν2 ∈ [−extent, extent)`: column `j` of `cols` spans
 /// `ν1 ∈ [−extent + 2·extent·j/cols, …)`, row `i` spans `ν2` likewise (row 0 lowest, the spectrum layout
@@ -112,7 +114,7 @@ pub struct BlueNoise {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Image {
-    /// Path of the npy file, relative to the TOML file's folder.
+    /// Path of the `.npy` or `.exr` file, relative to the TOML file's folder.
     pub file: PathBuf,
     /// Half-width of the image in normalized frequency `ν`.
     pub extent: f64,
@@ -543,23 +545,55 @@ fn image_value(img: &Image, nu1: f64, nu2: f64) -> f64 {
     img.pixels[fi as usize * cols + fj as usize]
 }
 
-/// Reads a 2D npy image of target values (`float64` or `float32`, finite, `≥ 0`).
+/// Reads a target image: a 2D npy array (`float64` or `float32`, row 0 at the lowest `ν2`) or an EXR
+/// image (channel `Y`, else `R`, else the first; top row at the highest `ν2`, as `anisospec spectrum`
+/// writes spectra). Every value must be finite and `≥ 0`.
 fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io("read the target image", path, e))?;
     let bad = |why: String| {
         Error::Input(format!(
-            "{}: not a usable target image ({why}); give a 2D float64 or float32 npy array of values >= 0",
+            "{}: not a usable target image ({why}); give a 2D float64 or float32 npy array, or a one-channel EXR image, of values >= 0",
             path.display()
         ))
     };
+    let is_exr = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let (pixels, [rows, cols]) = if is_exr {
+        if !path.is_file() {
+            return Err(Error::Input(format!(
+                "{}: the target image does not exist; check the 'file' key (relative to the TOML file)",
+                path.display()
+            )));
+        }
+        let (top_first, shape) = crate::output::image::read_exr_channel(path).map_err(bad)?;
+        (
+            crate::output::image::spectrum_image_rows(&top_first, shape[1]),
+            shape,
+        )
+    } else {
+        read_npy_image(path, &bad)?
+    };
+    if rows == 0 || cols == 0 {
+        return Err(bad("it is empty".into()));
+    }
+    if let Some((at, v)) = pixels
+        .iter()
+        .enumerate()
+        .find(|(_, v)| !v.is_finite() || **v < 0.0)
+    {
+        return Err(bad(format!("pixel ({}, {}) is {v}", at / cols, at % cols)));
+    }
+    Ok((pixels, [rows, cols]))
+}
+
+/// The values and `[rows, cols]` of a 2D npy array of `float64` or `float32`.
+fn read_npy_image(path: &Path, bad: &dyn Fn(String) -> Error) -> Result<(Vec<f64>, [usize; 2])> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io("read the target image", path, e))?;
     let npy = npyz::NpyFile::new(&bytes[..]).map_err(|e| bad(e.to_string()))?;
     let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
     let [rows, cols] = shape[..] else {
         return Err(bad(format!("shape {shape:?}")));
     };
-    if rows == 0 || cols == 0 {
-        return Err(bad("it is empty".into()));
-    }
     let is_f32 = npy.dtype().num_bytes() == Some(4);
     let pixels: Vec<f64> = if is_f32 {
         npy.into_vec::<f32>()
@@ -570,13 +604,6 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
     } else {
         npy.into_vec::<f64>().map_err(|e| bad(e.to_string()))?
     };
-    if let Some((at, v)) = pixels
-        .iter()
-        .enumerate()
-        .find(|(_, v)| !v.is_finite() || **v < 0.0)
-    {
-        return Err(bad(format!("pixel ({}, {}) is {v}", at / cols, at % cols)));
-    }
     Ok((pixels, [rows, cols]))
 }
 

@@ -63,9 +63,11 @@ pub struct OptimizeArgs {
     /// instead of uniform random points. Stratified starts keep their dark axes.
     #[arg(long)]
     pub init: Option<String>,
-    /// Keep the first coordinate N-stratified (2D: the first; 4D: x and y): one point per interval
-    /// [s/N, (s+1)/N). Its k1 axis then stays dark up to N, as N-rooks' does, beyond the loss's
-    /// frequency grid. Use it for tables applied with the transported shear (hairline, double wedge)
+    /// Hold the first coordinate (2D) or x and y (4D) where --init put them, one point per interval
+    /// [s/N, (s+1)/N) (stratified by rank first if the start is not), and move only the others. The
+    /// k1 axis then stays dark up to N, as N-rooks' does, beyond the loss's frequency grid, and in 4D
+    /// xy keeps the start's structure. Use it, with --init padded-pmj02 in 4D, for tables applied
+    /// through the transported shear (widened hairline, double wedge)
     #[arg(long)]
     pub latin: bool,
     /// Repulsion strength.

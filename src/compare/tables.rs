@@ -73,6 +73,17 @@ pub fn within_reach(mut target: Target, n: usize) -> Result<Target> {
     target.grid(n).map(|_| target)
 }
 
+/// The start of a table's sets: padded PMJ02 (xy and uv (0,2)-nets) where it allows `n`, else
+/// padded MJ; both are N-stratified in every coordinate.
+fn start_sampler(n: usize) -> &'static str {
+    let pmj = crate::samplers::build("padded-pmj02", 4).expect("a built-in sampler");
+    if pmj.check_n(n).is_ok() {
+        "padded-pmj02"
+    } else {
+        "padded-mj"
+    }
+}
+
 /// FNV-1a, 64 bits: a cache key that stays the same across builds and platforms.
 fn fnv1a(text: &str) -> u64 {
     text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
@@ -110,7 +121,7 @@ impl TableCache {
     /// The cached table's file, optimized and written first if missing, and its optimization time.
     fn table(&self, source: &Path, target: &Target, n: usize) -> Result<(PathBuf, f64)> {
         let key = format!(
-            "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|v2",
+            "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|v3",
             self.sets, self.seed
         );
         let stem = source
@@ -139,8 +150,9 @@ impl TableCache {
                 max_seconds: self.seconds,
                 tol: 1e-6,
             },
-            // A multi-jittered start begins with dark axes, which the unsheared-frame targets keep.
-            init: crate::samplers::grid::mj_shape(n).map(|_| "xuyv-mj".to_string()),
+            // x and y are held where the start puts them (Latin): a PMJ02 start keeps its (0,2)-net
+            // in xy, what a pixel seen through the oracle's shear depends on most.
+            init: Some(start_sampler(n).to_string()),
             latin: true,
         };
         let started = std::time::Instant::now();

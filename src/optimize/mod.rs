@@ -68,9 +68,10 @@ pub struct Setup {
     /// uniform random starts. A stratified start (e.g. `mj`) begins with dark axes, which a target
     /// around the `k1` axis keeps and widens; random starts end in poorer local minima.
     pub init: Option<String>,
-    /// Keep the first coordinate of each targeted pair N-stratified (2D: the first coordinate; 4D:
-    /// `x` and `y`), see [`latin`]: the `k1` axis of the target's projections then stays dark up to
-    /// `N`, far beyond the loss's grid. The pattern frame of a sheared edge needs it.
+    /// Hold the first coordinate of each targeted pair (2D: the first coordinate; 4D: `x` and `y`)
+    /// where the start put them, N-stratified (see [`latin`]), and move only the others: the `k1`
+    /// axis of the target's projections then stays dark up to `N`, far beyond the loss's grid, and in
+    /// 4D the `xy` projection keeps the start's structure (a (0,2)-net from a PMJ02 start).
     pub latin: bool,
 }
 
@@ -89,10 +90,7 @@ impl Setup {
         if let Method::Nufft { eps } = self.method {
             Method::nufft(eps)?;
         }
-        // Under the Latin constraint the first coordinate's axis is dark by construction; the
-        // target must not ask for anything else there.
-        let axes = [self.latin, false];
-        let grid = self.target.grid_with_axes(self.n, axes)?;
+        let grid = self.target.grid(self.n)?;
         let terms = match self.dims {
             2 => vec![Term {
                 proj: Projection::XY,
@@ -107,7 +105,6 @@ impl Setup {
                 });
                 strata.validate()?;
                 let sg = strata.grid(self.n)?;
-                let sg_xy = strata.grid_with_axes(self.n, [self.latin, self.latin])?;
                 let mut t = vec![
                     Term {
                         proj: Projection::XU,
@@ -121,10 +118,10 @@ impl Setup {
                     },
                 ];
                 if self.strata.weight > 0.0 {
-                    for (proj, grid) in [(Projection::XY, sg_xy), (Projection::UV, sg)] {
+                    for proj in [Projection::XY, Projection::UV] {
                         t.push(Term {
                             proj,
-                            grid,
+                            grid: sg.clone(),
                             weight: self.strata.weight,
                         });
                     }
@@ -243,9 +240,9 @@ pub fn latin_coords(dims: usize) -> Vec<usize> {
     }
 }
 
-/// Optimizes one set from `start` (`[n, dims]`, in `[0,1)`), with the Latin constraint of
-/// [`latin`] on [`latin_coords`] if `latin`. `rng` breaks ties between duplicate points. Fails with
-/// `Error::Numerical` if the start's loss is not finite.
+/// Optimizes one set from `start` (`[n, dims]`, in `[0,1)`), with [`latin_coords`] held (after
+/// [`latin::stratify`]) if `latin`. `rng` breaks ties between duplicate points and draws stratum
+/// offsets. Fails with `Error::Numerical` if the start's loss is not finite.
 pub fn optimize_set(
     objective: &Objective,
     start: &[f64],
@@ -277,39 +274,13 @@ pub fn optimize_set(
             check.loss
         )));
     }
-    let mut out = solver::minimize(objective, &set, limits, None);
-    if latin {
-        // Stratify the first coordinates, then polish the others with those held (see `latin`).
+    let frozen = latin.then(|| {
         let (n, dims) = (objective.n, objective.dims);
         let coords = latin_coords(dims);
-        let mut stratified = out.set.clone();
-        latin::stratify(&mut stratified, n, dims, &coords, rng);
-        let polish = solver::minimize(
-            objective,
-            &stratified,
-            limits,
-            Some(&latin::frozen(n, dims, &coords)),
-        );
-        out = solver::Outcome {
-            initial: out.initial,
-            iterations: out.iterations + polish.iterations,
-            evaluations: out.evaluations + polish.evaluations,
-            seconds: out.seconds + polish.seconds,
-            stop: format!("free: {}; stratified polish: {}", out.stop, polish.stop),
-            fallback_used: out.fallback_used || polish.fallback_used,
-            log: out
-                .log
-                .into_iter()
-                .chain(polish.log.into_iter().map(|row| LogRow {
-                    iter: row.iter + out.iterations,
-                    seconds: row.seconds + out.seconds,
-                    ..row
-                }))
-                .collect(),
-            set: polish.set,
-            last: polish.last,
-        };
-    }
+        latin::stratify(&mut set, n, dims, &coords, rng);
+        latin::frozen(n, dims, &coords)
+    });
+    let out = solver::minimize(objective, &set, limits, frozen.as_deref());
     let report = SetReport {
         set: index,
         initial_loss: out.initial.loss,

@@ -365,20 +365,11 @@ impl Target {
     /// `Error::Input` when the dark region holds more than [`REACH`]` × N` cells, naming the reachable
     /// fraction.
     pub fn grid(&self, n: usize) -> Result<TargetGrid> {
-        self.grid_with_axes(n, [false, false])
-    }
-
-    /// Like [`Target::grid`], with the frequency axes flagged in `dark_axes` made dark as well:
-    /// `dark_axes[0]` darkens the `k1` axis (`k2 = 0`, the spectrum of the first coordinate alone),
-    /// `dark_axes[1]` the `k2` axis. For a set kept N-stratified in that coordinate (the Latin
-    /// constraint of the optimizer), whose axis is dark up to `N` anyway: a target value of 1 there
-    /// would make the optimizer raise it. These cells do not count against the reach.
-    pub fn grid_with_axes(&self, n: usize, dark_axes: [bool; 2]) -> Result<TargetGrid> {
         let sqrt_n = (n as f64).sqrt();
         let ext = self.extent() * sqrt_n;
         // Fit a margin around the features so the energy they push out is kept flat too.
         let fit_radius = (2.0 * ext).max(ext + sqrt_n).max(4.0);
-        self.grid_within(n, fit_radius, dark_axes)
+        self.grid_within(n, fit_radius)
     }
 
     /// The area of the dark region in normalized frequency, i.e. its expected number of frequency
@@ -408,17 +399,12 @@ impl Target {
     /// just beyond the optimized range is seen.
     pub fn check_grid(&self, n: usize) -> Result<TargetGrid> {
         let fit = self.grid(n)?.fit_radius;
-        self.grid_within(n, 2.0 * fit, [false, false])
+        self.grid_within(n, 2.0 * fit)
     }
 
-    /// Like [`Target::grid_with_axes`] but with the fit radius (in frequency cells) given: used to
-    /// judge a fit beyond the radius it was optimized over.
-    pub fn grid_within(
-        &self,
-        n: usize,
-        fit_radius: f64,
-        dark_axes: [bool; 2],
-    ) -> Result<TargetGrid> {
+    /// Like [`Target::grid`] but with the fit radius (in frequency cells) given: used to judge a fit
+    /// beyond the radius it was optimized over.
+    pub fn grid_within(&self, n: usize, fit_radius: f64) -> Result<TargetGrid> {
         if n < 2 {
             return Err(Error::Usage(format!(
                 "-n {n}: an optimized set needs at least 2 points"
@@ -454,14 +440,6 @@ impl Target {
         if dark_cells as f64 > reach {
             return Err(self.beyond_reach(n, dark_cells as f64));
         }
-        for idx in 0..res * res {
-            let (k1, k2) = ((idx % res) as i64 - half, (idx / res) as i64 - half);
-            if inside[idx] && ((dark_axes[0] && k2 == 0) || (dark_axes[1] && k1 == 0)) {
-                target[idx] = 0.0;
-                dark[idx] = true;
-            }
-        }
-        let dark_cells = dark.iter().filter(|&&d| d).count();
         // The rim: non-dark cells next to a dark one (8-neighbourhood), where the energy pushed out of
         // the dark region piles up first. They get the dark cells' weight.
         let rim: Vec<bool> = (0..res * res)

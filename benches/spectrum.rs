@@ -54,6 +54,20 @@ fn expected_spectrum(c: &mut Criterion) {
     g.finish();
 }
 
+/// The reference of issue 2's 1000× target: one exact DFT realization of the `expected_spectrum` case
+/// (N = 4096, K = 256) on one thread.
+fn exact_one_realization(c: &mut Criterion) {
+    let (n, res) = (4096, 256);
+    let pts = random_set(n, 1, 0);
+    let pool = one_thread();
+    let mut g = c.benchmark_group("exact_one_realization");
+    g.sample_size(10).measurement_time(Duration::from_secs(5));
+    g.bench_function("N4096_K256_1thread", |b| {
+        b.iter(|| pool.install(|| black_box(power(&pts, res, Method::Exact))))
+    });
+    g.finish();
+}
+
 fn exact_vs_nufft(c: &mut Criterion) {
     let (n, res) = (1024, 64);
     let pts = random_set(n, 2, 0);
@@ -101,7 +115,8 @@ fn speed_vs_error(c: &mut Criterion) {
             }
         });
         let secs = t0.elapsed().as_secs_f64() / runs as f64;
-        rows.push((eps, plan.kernel_width(), plan.fine_size(), secs, err));
+        let grid = plan.grid(n);
+        rows.push((eps, grid.kernel_width, grid.size, secs, err));
         g.bench_function(format!("eps1e-{e}"), |b| {
             b.iter(|| pool.install(|| black_box(plan.power(&pts))))
         });
@@ -133,5 +148,11 @@ fn speed_vs_error(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, expected_spectrum, exact_vs_nufft, speed_vs_error);
+criterion_group!(
+    benches,
+    expected_spectrum,
+    exact_one_realization,
+    exact_vs_nufft,
+    speed_vs_error
+);
 criterion_main!(benches);

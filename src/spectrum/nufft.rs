@@ -191,6 +191,11 @@ fn reset<T: Copy>(v: &mut Vec<T>, len: usize, value: T) {
     v.resize(len, value);
 }
 
+/// Resizes `v` to `len`, keeping old contents: for buffers that are then overwritten entirely.
+fn fit<T: Copy + Default>(v: &mut Vec<T>, len: usize) {
+    v.resize(len, T::default());
+}
+
 /// The smallest even number `≥ m` whose only prime factors are 2, 3 and 5.
 fn next_smooth_even(m: usize) -> usize {
     let mut c = m.max(2);
@@ -307,6 +312,7 @@ impl Nufft2d {
         self.pick(points.len()).type1_into(
             points,
             |_| 1.0,
+            true,
             |i, f| out[i * k..(i + 1) * k].copy_from_slice(f),
         );
         out
@@ -326,6 +332,7 @@ impl Nufft2d {
         self.pick(points.len()).type1_into(
             points,
             |j| weights[j],
+            true,
             |i, f| out[i * k..(i + 1) * k].copy_from_slice(f),
         );
         out
@@ -343,12 +350,23 @@ impl Nufft2d {
         self.pick(points.len()).type1_into(
             points,
             |_| 1.0,
+            false,
             |i, f| {
-                for (o, f) in out[i * k..(i + 1) * k].iter_mut().zip(f) {
+                for (o, f) in out[i * k..].iter_mut().zip(f) {
                     *o = f.norm_sqr() * inv_n;
                 }
             },
         );
+        // Rows 1 ≤ i < K/2 (k2 < 0) beyond their first entry: P(k) = P(−k) for real weights, i.e. entry
+        // (i, j) equals entry (K − i, K − j); the same bits as computing it, since |conj(z)|² = |z|².
+        let half = k / 2;
+        for i in 1..half {
+            let (lo, hi) = out.split_at_mut((k - i) * k);
+            let dst = &mut lo[i * k + 1..(i + 1) * k];
+            for (d, s) in dst.iter_mut().zip(hi[1..k].iter().rev()) {
+                *d = *s;
+            }
+        }
         out
     }
 
@@ -664,11 +682,14 @@ impl Grid {
         }
     }
 
-    /// Type 1 core: hands each output row `i` (all `k1`, `k2 = i − K/2`) to `emit_row(i, F)`.
+    /// Type 1 core: hands each output row `i` (all `k1`, `k2 = i − K/2`) to `emit_row(i, F)`. Unless
+    /// `all_rows`, rows `1 ≤ i < K/2` carry only their first entry (`k1 = −K/2`): for real weights the
+    /// others are conjugates of entries of rows `K − i`.
     fn type1_into(
         &self,
         points: &[[f64; 2]],
         weight: impl Fn(usize) -> f64,
+        all_rows: bool,
         mut emit_row: impl FnMut(usize, &[Complex64]),
     ) {
         let (n, k, off) = (self.n, self.res, self.w / 2);
@@ -684,8 +705,8 @@ impl Grid {
             // Real-to-complex FFT along each core row (y → k2 ≥ 0); keep k2 = 0 ..= K/2, transposed so
             // that each kept k2 owns a contiguous line of length n over x. Rows go in blocks of BLOCK
             // so that the transposed writes fill whole cache lines.
-            reset(&mut s.cplx, ncols * n, zero);
-            reset(&mut s.row, BLOCK * (n / 2 + 1), zero);
+            fit(&mut s.cplx, ncols * n);
+            fit(&mut s.row, BLOCK * (n / 2 + 1));
             let scratch_len = self
                 .r2c
                 .get_scratch_len()
@@ -715,7 +736,7 @@ impl Grid {
             self.fwd.process_with_scratch(&mut s.cplx, &mut s.fft);
             // Deconvolve and emit row by row: line k2 ≥ 0 holds B(k1, k2) at k1 mod n; a row with
             // k2 < 0 is the mirror of line −k2, since the grid is real: B(k1, k2) = conj(B(−k1, −k2)).
-            reset(&mut s.row, k, zero);
+            fit(&mut s.row, k);
             let g = &mut s.row[..k];
             for i in 0..k {
                 let k2 = i as isize - half as isize;
@@ -723,6 +744,12 @@ impl Grid {
                 let line = &s.cplx[a * n..(a + 1) * n];
                 let c2 = self.corr[a];
                 let (lo, hi) = g.split_at_mut(half);
+                if !all_rows && i > 0 && k2 < 0 {
+                    // F(−K/2, k2) = conj(B(K/2, −k2)).
+                    lo[0] = line[half].conj() * (self.corr[half] * c2);
+                    emit_row(i, &lo[..1]);
+                    continue;
+                }
                 if k2 >= 0 {
                     // j < half: k1 = j − half < 0 at index n − half + j; j ≥ half: k1 = j − half.
                     for ((o, f), c) in lo

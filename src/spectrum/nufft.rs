@@ -551,7 +551,7 @@ impl Grid {
             for row in rows {
                 for (v, u) in v.iter_mut().zip(u) {
                     for (v, c) in v.iter_mut().zip(row) {
-                        *v = *v * u + c;
+                        *v = v.mul_add(u, *c);
                     }
                 }
             }
@@ -575,7 +575,9 @@ impl Grid {
     }
 
     /// Spreads with the widest vector unit the CPU has. The arithmetic is the same IEEE operations
-    /// in the same order on every path (no fused multiply-add), so the bits do not depend on the CPU.
+    /// in the same order on every path, with fused multiply-adds (`f64::mul_add`: one correctly
+    /// rounded instruction with FMA, the C library's correctly rounded `fma` without), so the bits do
+    /// not depend on the CPU.
     fn spread_w<const W: usize>(
         &self,
         points: &[[f64; 2]],
@@ -583,8 +585,8 @@ impl Grid {
         grid: &mut [f64],
     ) {
         #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2, checked just above.
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            // SAFETY: the CPU supports AVX2 and FMA, checked just above.
             unsafe { self.spread_w_avx2::<W>(points, weight, grid) };
             return;
         }
@@ -592,7 +594,7 @@ impl Grid {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     fn spread_w_avx2<const W: usize>(
         &self,
         points: &[[f64; 2]],
@@ -620,7 +622,7 @@ impl Grid {
                     .expect("W values");
                 let cx = c * vx;
                 for (g, &vy) in row.iter_mut().zip(&ky) {
-                    *g += cx * vy;
+                    *g = cx.mul_add(vy, *g);
                 }
             }
         };
@@ -639,7 +641,33 @@ impl Grid {
     }
 
     /// Interpolates the padded complex grid (side `n + W`) at each point.
+    ///
+    /// Same CPU dispatch as [`Grid::spread_w`].
     fn interp_w<const W: usize>(&self, grid: &[Complex64], points: &[[f64; 2]]) -> Vec<Complex64> {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            // SAFETY: the CPU supports AVX2 and FMA, checked just above.
+            return unsafe { self.interp_w_avx2::<W>(grid, points) };
+        }
+        self.interp_w_body::<W>(grid, points)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn interp_w_avx2<const W: usize>(
+        &self,
+        grid: &[Complex64],
+        points: &[[f64; 2]],
+    ) -> Vec<Complex64> {
+        self.interp_w_body::<W>(grid, points)
+    }
+
+    #[inline(always)]
+    fn interp_w_body<const W: usize>(
+        &self,
+        grid: &[Complex64],
+        points: &[[f64; 2]],
+    ) -> Vec<Complex64> {
         let side = self.n + W;
         points
             .iter()

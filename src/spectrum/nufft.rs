@@ -4,13 +4,25 @@
 //! semicircle" kernel `φ(z) = exp(β (sqrt(1 − z²) − 1))` of Barnett, Magland and af Klinteberg (2019),
 //! takes an FFT, keeps the central `K × K` modes and divides by the kernel's Fourier transform.
 //! Type 2 (modes → points) is its adjoint: divide, inverse FFT, interpolate with the same kernel.
-//! Cost: `O(N w² + n² log n)` with `n ≈ 2K` and `w` kernel points per dimension.
+//! Cost: `O(N w² + n² log n)` with `n ≈ σK` and `w` kernel points per dimension.
 //!
-//! Implementation notes: the point weights of type 1 are real, so the fine grid is real and a
-//! real-to-complex FFT (realfft) along x does half the work; only the `K/2 + 1` kept columns get the
-//! complex FFT along y, and the negative `k1` half comes from Hermitian symmetry. The kernel is
-//! evaluated per point as `2w` values of fitted polynomials (Horner, degree chosen at planning time
-//! until the measured fit error is below the tolerance), then `w²` multiply-adds into a padded grid
+//! Choice of grid: a plan holds up to three fine grids, `σ` = 1.25, 1.5 and 2, each with the kernel
+//! width `w ≈ ln(safety/eps) / (π sqrt(1 − 1/σ))` and shape `β = 0.97 π w (1 − 1/(2σ))` of Barnett et
+//! al. for that `σ`; the safety factor of each `σ` is calibrated against the exact DFT (see `GRIDS`).
+//! A smaller `σ` means a smaller FFT but a wider kernel, so each call picks the grid with the smallest
+//! modelled cost `n² log2 n + N w²` for its number of points `N` (both terms ≈ 0.25 ns per unit on the
+//! development machine). For K = 256 and N = 4096: σ = 1.25 (n = 320) up to eps = 1e-7, σ = 1.5
+//! (n = 384) at 1e-8, σ = 2 (n = 512) below, where the narrower grids would need w > 16 or leave the
+//! error model; from N ≈ 5 500 (eps = 1e-6) the larger grids win.
+//!
+//! Implementation notes: the point weights of type 1 are real, so the fine grid is real. The grid is
+//! stored x-major (rows follow the first coordinate); a real-to-complex FFT (realfft) along each row
+//! gives `k2 ≥ 0`, only the `K/2 + 1` kept `k2` get the complex FFT along x, and `k2 < 0` comes from
+//! Hermitian symmetry. Each output row is then a contiguous run of one transformed line, and the
+//! power spectrum deconvolves only the rows with `k2 ≥ 0` and mirrors the rest (`P(k) = P(−k)`).
+//! The kernel is evaluated per point as `2w` values of fitted polynomials (Horner with fused
+//! multiply-adds, degree chosen at planning time until the measured fit error is below the tolerance
+//! scaled by the deconvolution's band-edge gain), then `w²` fused multiply-adds into a padded grid
 //! whose margins are folded back once per transform.
 //!
 //! Frequencies follow the grid convention of [`crate::spectrum`]: entry `i * K + j` holds
@@ -118,11 +130,13 @@ pub const EPS_MAX: f64 = 1e-1;
 /// error of `P = |F|²/N` (≤ 10·eps in every bin above 1e-3 of the mean), which is stricter than the
 /// global relative l2 error the kernel formulas of Barnett et al. aim at: a bin at the threshold has
 /// `|F| ≈ 0.03 sqrt(N)` while the error is `≈ eps sqrt(N)`, and lower `σ` leaves less room at the band
-/// edge, where `ψ̂` is smallest. Calibration against the exact DFT (K = 64, 96, 256; random and
-/// jittered sets; every width 6 … 16): the worst per-bin error of `P` is `C exp(−π w sqrt(1 − 1/σ))`
-/// with `C` at most 1500 (σ = 2), 2300 (σ = 1.5) and 1700 (σ = 1.25); the safety factor is `C / 5`,
-/// so the predicted worst error is 5·eps, half the contract. At σ = 1.5 the error stops following the
-/// model beyond w = 14 (7e-9 at w = 14, 8e-10 at w = 16, the predicted 5.7e-10), hence its cap.
+/// edge, where `ψ̂` is smallest. Calibration against the exact DFT (K = 64, 96 and 256 with N = K²/16;
+/// random and jittered sets; widths 6 … 16 with an exact kernel fit): the worst per-bin relative error
+/// of `P` is `C exp(−π w sqrt(1 − 1/σ))` with `C` at most 1500 (σ = 2), 2300 (σ = 1.5) and 1800
+/// (σ = 1.25). The safety factors 300, 460 and 340 put the predicted worst error at 5, 5 and 5.3 eps,
+/// about half the contract, before the rounding up of `w` (the tests in tests/nufft.rs and the table of
+/// benches/spectrum.rs check the contract). At σ = 1.5 the error stops following the model beyond
+/// w = 14 (7e-9 at w = 14, 8e-10 at w = 16 against a predicted 5.7e-10), hence its cap.
 const GRIDS: [(f64, f64, usize); 3] = [(1.25, 340.0, 16), (1.5, 460.0, 14), (2.0, 300.0, 16)];
 /// Rows per block in the transposing loops of type 1.
 const BLOCK: usize = 8;

@@ -556,7 +556,10 @@ impl Grid {
                 }
             }
         } else {
-            let u = s.map(|s| 2.0 * s - 1.0);
+            let mut u = s;
+            for u in u.iter_mut() {
+                *u = 2.0 * *u - 1.0;
+            }
             let mut rows = self.coef.chunks_exact(W);
             let lead = rows.next().expect("kernel fit has a leading row");
             for v in v.iter_mut() {
@@ -626,20 +629,8 @@ impl Grid {
         grid: &mut [f64],
     ) {
         let side = self.n + W;
-        // Adds c·ky ⊗ kx at rows px.., columns py.. of the padded grid. Grid rows follow x (first
-        // coordinate), columns y (second, contiguous).
-        let mut add = |(px, kx): (usize, [f64; W]), (py, ky): (usize, [f64; W]), c: f64| {
-            let block = &mut grid[px * side + py..(px + W - 1) * side + py + W];
-            for (l1, &vx) in kx.iter().enumerate() {
-                let row: &mut [f64; W] = (&mut block[l1 * side..l1 * side + W])
-                    .try_into()
-                    .expect("W values");
-                let cx = c * vx;
-                for (g, &vy) in row.iter_mut().zip(&ky) {
-                    *g = cx.mul_add(vy, *g);
-                }
-            }
-        };
+        // No closures in here: they might not be inlined, and would then lose the target features
+        // of the caller (a libm call per fused multiply-add).
         for (j, p) in points.iter().enumerate() {
             check_finite(j, p);
             let mut at = [0; 2];
@@ -649,8 +640,20 @@ impl Grid {
             }
             // One loop for both coordinates: two interleaved Horner recurrences (measured 10 % faster
             // than one after the other; more points at a time were slower).
-            let v = self.values::<W, 2>(s);
-            add((at[0], v[0]), (at[1], v[1]), weight(j));
+            let [kx, ky] = self.values::<W, 2>(s);
+            let c = weight(j);
+            // Add c·kx ⊗ ky at rows at[0].., columns at[1].. of the padded grid. Grid rows follow x
+            // (first coordinate), columns y (second, contiguous).
+            let block = &mut grid[at[0] * side + at[1]..(at[0] + W - 1) * side + at[1] + W];
+            for (l1, &vx) in kx.iter().enumerate() {
+                let row: &mut [f64; W] = (&mut block[l1 * side..l1 * side + W])
+                    .try_into()
+                    .expect("W values");
+                let cx = c * vx;
+                for (g, &vy) in row.iter_mut().zip(&ky) {
+                    *g = cx.mul_add(vy, *g);
+                }
+            }
         }
     }
 
@@ -683,25 +686,24 @@ impl Grid {
         points: &[[f64; 2]],
     ) -> Vec<Complex64> {
         let side = self.n + W;
-        points
-            .iter()
-            .enumerate()
-            .map(|(j, p)| {
-                check_finite(j, p);
-                let (px, kx) = self.kernel_w::<W>(p[0]);
-                let (py, ky) = self.kernel_w::<W>(p[1]);
-                let mut g = Complex64::new(0.0, 0.0);
-                for (l2, &vy) in ky.iter().enumerate() {
-                    let row = &grid[(py + l2) * side + px..][..W];
-                    let mut acc = Complex64::new(0.0, 0.0);
-                    for (u, &vx) in row.iter().zip(&kx) {
-                        acc += u * vx;
-                    }
-                    g += acc * vy;
+        // A loop, not a closure: see spread_w_body.
+        let mut out = Vec::with_capacity(points.len());
+        for (j, p) in points.iter().enumerate() {
+            check_finite(j, p);
+            let (px, kx) = self.kernel_w::<W>(p[0]);
+            let (py, ky) = self.kernel_w::<W>(p[1]);
+            let mut g = Complex64::new(0.0, 0.0);
+            for (l2, &vy) in ky.iter().enumerate() {
+                let row = &grid[(py + l2) * side + px..][..W];
+                let mut acc = Complex64::new(0.0, 0.0);
+                for (u, &vx) in row.iter().zip(&kx) {
+                    acc += u * vx;
                 }
-                g
-            })
-            .collect()
+                g += acc * vy;
+            }
+            out.push(g);
+        }
+        out
     }
 
     /// Adds the padding rows and columns of a padded grid onto the periodic core they alias.

@@ -355,13 +355,18 @@ impl Nufft2d {
     /// The power spectrum `P(k) = |F(k)|² / N` (layout of [`crate::spectrum`]). An empty set has
     /// `P = 0` everywhere.
     pub fn power(&self, points: &[[f64; 2]]) -> Vec<f64> {
+        self.power_on(self.pick(points.len()), points)
+    }
+
+    /// [`Nufft2d::power`] on a given grid.
+    fn power_on(&self, grid: &Grid, points: &[[f64; 2]]) -> Vec<f64> {
         let k = self.res;
         let mut out = vec![0.0; k * k];
         if points.is_empty() {
             return out;
         }
         let inv_n = 1.0 / points.len() as f64;
-        self.pick(points.len()).type1_into(
+        grid.type1_into(
             points,
             |_| 1.0,
             false,
@@ -883,6 +888,59 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::spectrum::exact;
+    use rand::Rng as _;
+
+    /// Maximum relative error of `P` over the bins whose exact power is at least 1e-3 of the mean.
+    fn max_rel_err(p: &[f64], exact: &[f64]) -> f64 {
+        let mean = exact.iter().sum::<f64>() / exact.len() as f64;
+        p.iter()
+            .zip(exact)
+            .filter(|(_, e)| **e >= 1e-3 * mean)
+            .map(|(a, e)| (a - e).abs() / e)
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn every_grid_meets_the_contract() {
+        // The cost model decides which grid a call uses; each grid a plan holds must meet the
+        // contract on its own (random and jittered sets, K = 64 and 50).
+        let mut rng = crate::rng::stream(51, 0);
+        let random: Vec<[f64; 2]> = (0..600)
+            .map(|_| [rng.random::<f64>(), rng.random::<f64>()])
+            .collect();
+        let m = 24;
+        let jittered: Vec<[f64; 2]> = (0..m * m)
+            .map(|c| {
+                let (i, j) = ((c / m) as f64, (c % m) as f64);
+                [
+                    (j + rng.random::<f64>()) / m as f64,
+                    (i + rng.random::<f64>()) / m as f64,
+                ]
+            })
+            .collect();
+        for res in [64, 50] {
+            for pts in [&random, &jittered] {
+                let n = pts.len() as f64;
+                let reference: Vec<f64> = exact::fourier_sums(pts, res)
+                    .iter()
+                    .map(|f| f.norm_sqr() / n)
+                    .collect();
+                for eps in [1e-3, 1e-6, 1e-9] {
+                    let plan = Nufft2d::new(res, eps).unwrap();
+                    for g in &plan.grids {
+                        let err = max_rel_err(&plan.power_on(g, pts), &reference);
+                        assert!(
+                            err <= 10.0 * eps,
+                            "K={res} eps={eps:e} σ={} w={}: {err:e}",
+                            g.sigma,
+                            g.w
+                        );
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn gauss_legendre_integrates_polynomials_exactly() {
@@ -892,6 +950,33 @@ mod tests {
         assert!((s - 2.0 / 13.0).abs() < 1e-15, "{s}");
         let total: f64 = w.iter().sum();
         assert!((total - 2.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn every_grid_matches_the_exact_type2() {
+        let mut rng = crate::rng::stream(52, 0);
+        let pts: Vec<[f64; 2]> = (0..300)
+            .map(|_| [rng.random::<f64>(), rng.random::<f64>()])
+            .collect();
+        let res = 48;
+        let coeffs: Vec<Complex64> = (0..res * res)
+            .map(|_| Complex64::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5))
+            .collect();
+        let reference = exact::type2(&coeffs, &pts, res);
+        let den: f64 = reference.iter().map(|y| y.norm_sqr()).sum();
+        for eps in [1e-3, 1e-6, 1e-9] {
+            let plan = Nufft2d::new(res, eps).unwrap();
+            for g in &plan.grids {
+                let got = g.type2(&coeffs, &pts);
+                let num: f64 = got
+                    .iter()
+                    .zip(&reference)
+                    .map(|(x, y)| (x - y).norm_sqr())
+                    .sum();
+                let err = (num / den).sqrt();
+                assert!(err <= 10.0 * eps, "eps={eps:e} σ={}: {err:e}", g.sigma);
+            }
+        }
     }
 
     #[test]

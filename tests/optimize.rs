@@ -214,11 +214,12 @@ fn target_files_are_strict() {
 }
 
 /// The fit criteria of issue 5 at N = 256 over 8 sets: mean expected P over the dark cells ≤ 0.1 for
-/// every shipped target, and annular-mean error ≤ 0.1 over the fitted range. The annular goal is NOT met
-/// by the hairline and the double wedge: the energy pushed out of their dark regions piles up near the
-/// edge of the fitted disc (measured 0.100–0.108 over several seeds, worst annulus at |k| ≈ 2.2–2.9
-/// sqrt(N)), so for those two only the dark-region criterion is asserted and the annular error is
-/// printed; the miss is reported, not hidden behind a looser bound.
+/// every shipped target, and annular-mean error ≤ 0.1 over the fitted range where that goal is met.
+/// Measured with these settings (seed 2024): annular error 0.099 for the hairline band and 0.115 for
+/// the double wedge, whose dark regions push energy into the annuli near the edge of the fitted disc
+/// (at N = 1024: 0.108 and 0.123, and 0.121 for the widened hairline, 0.105 for the image): for those
+/// two only the dark-region criterion is asserted and the miss is reported, not hidden behind a looser
+/// bound.
 #[test]
 fn shipped_targets_fit_at_256() {
     let n = 256;
@@ -229,7 +230,7 @@ fn shipped_targets_fit_at_256() {
         ("double-wedge.toml", false),
         ("blue-noise.toml", true),
         ("image-ellipse.toml", true),
-        ("widened-hairline.toml", false),
+        ("widened-hairline.toml", true),
     ] {
         let target = Target::load(&shipped(name)).unwrap();
         let setup = Setup {

@@ -236,7 +236,7 @@ fn write_gallery(
         let shear_note = if spec.family() == "classical" {
             ""
         } else {
-            ", shear 0.5 (double wedge over [0.3, 0.7])"
+            ", at shear 0.5"
         };
         write_sheet(
             &out.join(&file),
@@ -388,7 +388,7 @@ fn write_markdown(
         writeln!(w, "\n## Spectra\n")?;
         writeln!(
             w,
-            "Expected power spectra, N = {}, K = {}, {} realizations; sheared and optimized samplers at shear 0.5. \
+            "Expected power spectra, N = {}, K = {}, {} realizations; sheared and optimized samplers at shear 0.5 (the double-wedge table made for shears 0.3 to 0.7). \
              log10 P from -2 (black) to 1 (white).\n",
             c.spectra_n, c.spectra_res, c.spectra_realizations
         )?;

@@ -6,6 +6,8 @@
 //! - [`solver`]: argmin L-BFGS in rounds, with steepest descent as the fallback; limits on iterations,
 //!   time and tolerance; a log of loss against iteration and time.
 //! - [`metrics`]: the fit of the expected spectrum to the target.
+//! - [`latin`]: holds the first coordinates N-stratified where the start put them (tables used
+//!   through the seam-free shear need it).
 //! - [`optimize_sets`]: many sets in parallel, set `s` seeded by `rng::stream(seed, s)`.
 //!
 //! In 2D the target applies to the set's two coordinates. In 4D it applies to `xu` and `yv`, and `xy`

@@ -28,7 +28,7 @@
 //! 0.29 ms budget before any spreading (0.20 ms at w = 14); smaller σ would need w > 16.
 
 use anisospec::rng::stream;
-use anisospec::spectrum::nufft::Nufft2d;
+use anisospec::spectrum::nufft::{contract_error, Nufft2d};
 use anisospec::spectrum::{power, Method};
 use criterion::{criterion_group, criterion_main, Criterion};
 use rand::Rng as _;
@@ -102,16 +102,6 @@ fn exact_vs_nufft(c: &mut Criterion) {
     g.finish();
 }
 
-/// Maximum relative error of `P` over the bins whose exact power is at least 1e-3 of the mean.
-fn max_rel_err(p: &[f64], exact: &[f64]) -> f64 {
-    let mean = exact.iter().sum::<f64>() / exact.len() as f64;
-    p.iter()
-        .zip(exact)
-        .filter(|(_, e)| **e >= 1e-3 * mean)
-        .map(|(a, e)| (a - e).abs() / e)
-        .fold(0.0, f64::max)
-}
-
 fn speed_vs_error(c: &mut Criterion) {
     let (n, res) = (4096, 256);
     let pts = random_set(n, 3, 0);
@@ -124,7 +114,7 @@ fn speed_vs_error(c: &mut Criterion) {
     for e in 2..=12 {
         let eps = 10f64.powi(-e);
         let plan = Nufft2d::new(res, eps).unwrap();
-        let err = max_rel_err(&plan.power(&pts), &reference);
+        let err = contract_error(&plan.power(&pts), &reference);
         let runs = 20;
         let t0 = Instant::now();
         pool.install(|| {

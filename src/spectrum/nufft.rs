@@ -885,21 +885,22 @@ impl Grid {
     }
 }
 
+/// The error the accuracy contract of [`Nufft2d::new`] bounds: the maximum relative error of a power
+/// spectrum `p` against the exact one, over the bins whose exact power is at least 1e-3 of the mean.
+pub fn contract_error(p: &[f64], exact: &[f64]) -> f64 {
+    let mean = exact.iter().sum::<f64>() / exact.len() as f64;
+    p.iter()
+        .zip(exact)
+        .filter(|(_, e)| **e >= 1e-3 * mean)
+        .map(|(a, e)| (a - e).abs() / e)
+        .fold(0.0, f64::max)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::spectrum::exact;
     use rand::Rng as _;
-
-    /// Maximum relative error of `P` over the bins whose exact power is at least 1e-3 of the mean.
-    fn max_rel_err(p: &[f64], exact: &[f64]) -> f64 {
-        let mean = exact.iter().sum::<f64>() / exact.len() as f64;
-        p.iter()
-            .zip(exact)
-            .filter(|(_, e)| **e >= 1e-3 * mean)
-            .map(|(a, e)| (a - e).abs() / e)
-            .fold(0.0, f64::max)
-    }
 
     #[test]
     fn every_grid_meets_the_contract() {
@@ -929,7 +930,7 @@ mod tests {
                 for eps in [1e-3, 1e-6, 1e-9] {
                     let plan = Nufft2d::new(res, eps).unwrap();
                     for g in &plan.grids {
-                        let err = max_rel_err(&plan.power_on(g, pts), &reference);
+                        let err = contract_error(&plan.power_on(g, pts), &reference);
                         assert!(
                             err <= 10.0 * eps,
                             "K={res} eps={eps:e} σ={} w={}: {err:e}",

@@ -8,7 +8,9 @@
 //! Set `ANISOSPEC_BENCH_QUICK=1` to skip the N = 4096 optimizations. The variance the tables buy is
 //! measured in `tests/compare.rs` and in `anisospec compare`.
 
-use anisospec::optimize::{optimize_set, Limits, Setup, Strata, DEFAULT_REPULSION};
+use anisospec::optimize::{
+    optimize_set, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT, DEFAULT_REPULSION,
+};
 use anisospec::rng;
 use anisospec::samplers::build;
 use anisospec::spectrum::Method;
@@ -35,6 +37,7 @@ fn setup(n: usize, dims: usize, max_iters: u64, latin: bool) -> Setup {
         },
         init: Some(if dims == 4 { "xuyv-mj" } else { "mj" }.into()),
         latin,
+        annular_weight: DEFAULT_ANNULAR_WEIGHT,
     }
 }
 

@@ -3,7 +3,8 @@
 
 use anisospec::optimize::loss::{Objective, Repulsion, Term};
 use anisospec::optimize::{
-    metrics, optimize_set, optimize_sets, Limits, Setup, Strata, DEFAULT_REPULSION,
+    metrics, optimize_set, optimize_sets, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
+    DEFAULT_REPULSION,
 };
 use anisospec::output::write_npy;
 use anisospec::points::Projection;
@@ -96,6 +97,8 @@ fn gradient_matches_finite_differences_for_every_target_kind() {
                 limits: Limits::default(),
                 init: None,
                 latin: false,
+                // Large, so that the annular-mean term's share of the gradient is checked too.
+                annular_weight: 100.0,
             };
             let obj = setup.objective().unwrap();
             let mut r = rng::stream(77, (t * 10 + dims) as u64);
@@ -103,6 +106,15 @@ fn gradient_matches_finite_differences_for_every_target_kind() {
             assert!(
                 obj.evaluate(&set).repulsion > 0.0,
                 "repulsion term inactive"
+            );
+            let without_annuli = Setup {
+                annular_weight: 0.0,
+                ..setup.clone()
+            };
+            assert!(
+                obj.evaluate(&set).spectral
+                    > without_annuli.objective().unwrap().evaluate(&set).spectral,
+                "annular term inactive"
             );
             let err = gradient_error(&obj, &set);
             eprintln!(
@@ -133,6 +145,7 @@ fn nufft_gradient_matches_exact_gradient() {
             limits: Limits::default(),
             init: None,
             latin: false,
+            annular_weight: 100.0,
         };
         let exact = setup.objective().unwrap();
         setup.method = Method::Nufft { eps: 1e-9 };
@@ -213,24 +226,21 @@ fn target_files_are_strict() {
     assert!((frac - 1.0 / std::f64::consts::PI).abs() < 0.03, "{e}");
 }
 
-/// The fit criteria of issue 5 at N = 256 over 8 sets: mean expected P over the dark cells ≤ 0.1 for
-/// every shipped target, and annular-mean error ≤ 0.1 over the fitted range where that goal is met.
-/// Measured with these settings (seed 2024): annular error 0.099 for the hairline band and 0.115 for
-/// the double wedge, whose dark regions push energy into the annuli near the edge of the fitted disc
-/// (at N = 1024: 0.108 and 0.123, and 0.121 for the widened hairline, 0.105 for the image): for those
-/// two only the dark-region criterion is asserted and the miss is reported, not hidden behind a looser
-/// bound.
+/// The fit criteria of issue 5 at N = 256 over 8 sets, for every shipped target: mean expected P
+/// over the dark cells ≤ 0.1, and annular-mean error ≤ 0.1 over the fitted range. Measured with these
+/// settings (seed 2024): dark means 0.005–0.080, annular errors 0.001–0.010 (at N = 1024: 0.005–0.067
+/// and 0.001–0.008). Without the loss's annular term the annular errors were 0.074–0.115.
 #[test]
 fn shipped_targets_fit_at_256() {
     let n = 256;
     let sets = 8;
     let mut failures = Vec::new();
-    for (name, annular_goal_met) in [
-        ("hairline.toml", false),
-        ("double-wedge.toml", false),
-        ("blue-noise.toml", true),
-        ("image-ellipse.toml", true),
-        ("widened-hairline.toml", true),
+    for name in [
+        "hairline.toml",
+        "double-wedge.toml",
+        "blue-noise.toml",
+        "image-ellipse.toml",
+        "widened-hairline.toml",
     ] {
         let target = Target::load(&shipped(name)).unwrap();
         let setup = Setup {
@@ -247,6 +257,7 @@ fn shipped_targets_fit_at_256() {
             },
             init: None,
             latin: false,
+            annular_weight: DEFAULT_ANNULAR_WEIGHT,
         };
         let obj = setup.objective().unwrap();
         let (pts, reports) = optimize_sets(&setup, sets, 2024, &|_| {}).unwrap();
@@ -255,7 +266,7 @@ fn shipped_targets_fit_at_256() {
             .all(|r| r.loss.is_finite() && r.loss < r.initial_loss));
         let fit = metrics::fit(&pts, Projection::XY, &obj.terms[0].grid, Method::Exact);
         eprintln!("{name} N={n}: {fit:?}");
-        if fit.dark_mean > 0.1 || (annular_goal_met && fit.annular_max_error > 0.1) {
+        if fit.dark_mean > 0.1 || fit.annular_max_error > 0.1 {
             failures.push(format!(
                 "{name}: dark mean {:.4}, annular error {:.4}",
                 fit.dark_mean, fit.annular_max_error
@@ -277,6 +288,7 @@ fn small_objective(n: usize) -> Objective {
             weight: 1.0,
         }],
         repulsion: DEFAULT_REPULSION,
+        annular_weight: DEFAULT_ANNULAR_WEIGHT,
         method: Method::Exact,
     }
 }
@@ -341,6 +353,7 @@ fn extreme_targets_end_in_a_clear_report() {
         },
         init: None,
         latin: false,
+        annular_weight: DEFAULT_ANNULAR_WEIGHT,
     };
     let (_, reports) = optimize_sets(&setup, 2, 1, &|_| {}).unwrap();
     assert!(reports.iter().all(|r| r.loss.is_finite()));
@@ -368,6 +381,7 @@ fn same_seed_same_bits_whatever_the_thread_count() {
         },
         init: None,
         latin: true,
+        annular_weight: DEFAULT_ANNULAR_WEIGHT,
     };
     let run = |threads| {
         rayon::ThreadPoolBuilder::new()

@@ -2,7 +2,9 @@
 //! header) with a JSON sidecar and a CSV log.
 
 use crate::error::{Error, Result};
-use crate::optimize::{self, loss::Repulsion, metrics, Limits, Setup, Strata};
+use crate::optimize::{
+    self, loss::Repulsion, metrics, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
+};
 use crate::output::{ensure_not_input, write_atomic};
 use crate::points::io::write_points;
 use crate::points::PointSets;
@@ -70,6 +72,10 @@ pub struct OptimizeArgs {
     /// through the transported shear (widened hairline, double wedge)
     #[arg(long)]
     pub latin: bool,
+    /// Weight of the loss term that pulls the mean P of each annulus |k| = r (outside the dark region)
+    /// to the target's mean there (0 switches it off).
+    #[arg(long, default_value_t = DEFAULT_ANNULAR_WEIGHT)]
+    pub annular_weight: f64,
     /// Repulsion strength.
     #[arg(long, default_value_t = 0.1)]
     pub repulsion_weight: f64,
@@ -152,6 +158,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         },
         init: args.init.clone(),
         latin: args.latin,
+        annular_weight: args.annular_weight,
     };
     let objective = setup.objective()?;
     let bar = if std::io::stderr().is_terminal() {
@@ -191,7 +198,8 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             "n": args.n, "dims": args.dims, "sets": args.sets, "seed": args.seed,
             "method": if args.exact { "exact".to_string() } else { format!("nufft eps={}", args.eps) },
             "strata": setup.strata, "repulsion": { "radius": setup.repulsion.radius, "weight": setup.repulsion.weight },
-            "limits": setup.limits, "init": setup.init,
+            "limits": setup.limits, "init": setup.init, "latin": setup.latin,
+            "annular_weight": setup.annular_weight,
             "grid_res": objective.terms.iter().map(|t| t.grid.res).collect::<Vec<_>>(),
         },
         "final_loss": {

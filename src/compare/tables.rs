@@ -9,7 +9,9 @@
 
 use super::config::CompareConfig;
 use crate::error::Result;
-use crate::optimize::{optimize_sets, Limits, Setup, Strata, DEFAULT_REPULSION};
+use crate::optimize::{
+    optimize_sets, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT, DEFAULT_REPULSION,
+};
 use crate::points::io::write_points;
 use crate::points::shear::ShearMode;
 use crate::samplers::table::Table;
@@ -121,7 +123,7 @@ impl TableCache {
     /// The cached table's file, optimized and written first if missing, and its optimization time.
     fn table(&self, source: &Path, target: &Target, n: usize) -> Result<(PathBuf, f64)> {
         let key = format!(
-            "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|v3",
+            "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|annular={DEFAULT_ANNULAR_WEIGHT}|v4",
             self.sets, self.seed
         );
         let stem = source
@@ -154,6 +156,7 @@ impl TableCache {
             // in xy, what a pixel seen through the oracle's shear depends on most.
             init: Some(start_sampler(n).to_string()),
             latin: true,
+            annular_weight: DEFAULT_ANNULAR_WEIGHT,
         };
         let started = std::time::Instant::now();
         let (points, _) = optimize_sets(&setup, self.sets, self.seed, &|_| {})?;

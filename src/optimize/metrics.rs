@@ -63,7 +63,6 @@ pub fn expected_power(
 pub fn fit(points: &PointSets, proj: Projection, grid: &TargetGrid, method: Method) -> Fit {
     let res = grid.res;
     let p = expected_power(points, proj, res, method);
-    let half = (res / 2) as f64;
     let dark_sum: f64 = p
         .iter()
         .zip(&grid.dark)
@@ -75,16 +74,9 @@ pub fn fit(points: &PointSets, proj: Projection, grid: &TargetGrid, method: Meth
     } else {
         0.0
     };
-    // Only whole annuli: r + ½ ≤ fit radius.
-    let bins = (grid.fit_radius - 0.5).floor().max(0.0) as usize;
-    let mut acc = vec![(0.0f64, 0.0f64, 0usize); bins + 1];
+    let mut acc = vec![(0.0f64, 0.0f64, 0usize); grid.annuli()];
     for (idx, pk) in p.iter().enumerate() {
-        if grid.weight[idx] == 0.0 || grid.dark[idx] {
-            continue;
-        }
-        let (k1, k2) = ((idx % res) as f64 - half, (idx / res) as f64 - half);
-        let r = k1.hypot(k2).round() as usize;
-        if r <= bins {
+        if let Some(r) = grid.annulus(idx) {
             acc[r].0 += pk;
             acc[r].1 += grid.target[idx];
             acc[r].2 += 1;

@@ -169,6 +169,22 @@ pub struct TargetGrid {
     pub dark: Vec<bool>,
     /// Number of dark cells.
     pub dark_cells: usize,
+    /// Each cell's annulus (see [`TargetGrid::annulus`]).
+    rings: Vec<Option<u32>>,
+}
+
+impl TargetGrid {
+    /// Number of annuli compared: `r = 0 ..` this, where annulus `r` holds the frequencies with
+    /// `round(|k|) = r` and lies wholly inside the fit radius (`r + ½ ≤` fit radius).
+    pub fn annuli(&self) -> usize {
+        (self.fit_radius - 0.5).floor().max(0.0) as usize + 1
+    }
+
+    /// The annulus (`round(|k|)`, see [`TargetGrid::annuli`]) of the cell at index `idx`, for the
+    /// annular-mean comparisons of the fit and of the loss: only non-dark cells with `W > 0`.
+    pub fn annulus(&self, idx: usize) -> Option<usize> {
+        self.rings[idx].map(|r| r as usize)
+    }
 }
 
 fn finite(name: &str, v: f64) -> Result<()> {
@@ -486,7 +502,7 @@ impl Target {
                 }
             })
             .collect();
-        Ok(TargetGrid {
+        let mut grid = TargetGrid {
             n,
             res,
             fit_radius,
@@ -494,7 +510,20 @@ impl Target {
             weight,
             dark,
             dark_cells,
-        })
+            rings: Vec::new(),
+        };
+        let annuli = grid.annuli();
+        grid.rings = (0..res * res)
+            .map(|idx| {
+                let (k1, k2) = (
+                    (idx % res) as f64 - half as f64,
+                    (idx / res) as f64 - half as f64,
+                );
+                let r = k1.hypot(k2).round() as usize;
+                (grid.weight[idx] > 0.0 && !grid.dark[idx] && r < annuli).then_some(r as u32)
+            })
+            .collect();
+        Ok(grid)
     }
 }
 

@@ -286,12 +286,13 @@ fn widened_hairline_gains_under_oracle_error() {
 /// Issue 5, double wedge: on the fan of edges with shears in [0.3, 0.7] (its double wedge is the
 /// target's), the double-wedge table (shipped target, 8 sets, moved by the middle shear 0.5) against
 /// the classical samplers: jittered, Owen-scrambled Sobol and PMJ02 (padded, 4D, and on the xu plane
-/// itself) and transported-sheared MJ, at N = 64, 256, 1024.
+/// itself), and transported-sheared MJ, Sobol and PMJ02, at N = 64, 256, 1024.
 ///
 /// Asserted: at N = 256 and 1024 the table beats every one of them by more than 3 combined standard
-/// errors. Not met: the goal of 3× over the best classical sampler at N = 1024 (measured 1.75× over
-/// sheared MJ on the xu plane, 2.0–2.7× over the Sobol and PMJ02 variants, R = 1024); at N = 64 the
-/// table gains 1.3× over sheared MJ on the xu plane, which is not asserted.
+/// errors. Not met: the goal of 3× over the best classical sampler at N = 1024. Measured (R = 1024):
+/// 2.49× over sheared MJ on the xu plane, 2.8–3.8× over unsheared Sobol and PMJ02, but only 1.45× over
+/// sheared PMJ02 and 1.52× over sheared Sobol on the xu plane, the strongest classical samplers here;
+/// at N = 64, 1.4–1.7× over the sheared ones, which is not asserted.
 #[test]
 fn double_wedge_gains_on_the_fan() {
     let dir = tempfile::tempdir().unwrap();
@@ -313,7 +314,8 @@ fn double_wedge_gains_on_the_fan() {
     .map(|s| SamplerSpec::Classical(s.into()))
     .to_vec();
     classical.extend(
-        ["padded-mj", "xuyv-mj"].map(|s| SamplerSpec::Sheared(s.into(), ShearMode::Transported)),
+        ["padded-mj", "xuyv-mj", "xuyv-sobol", "xuyv-pmj02"]
+            .map(|s| SamplerSpec::Sheared(s.into(), ShearMode::Transported)),
     );
     for n in [64, 256, 1024] {
         let t = mse_over(&table, subject, n, 1.0, &tables, GAIN_REALIZATIONS);

@@ -66,9 +66,9 @@ pub struct OptimizeArgs {
     #[arg(long)]
     pub init: Option<String>,
     /// Hold the first coordinate (2D) or x and y (4D) where --init put them, one point per interval
-    /// [s/N, (s+1)/N) (stratified by rank first if the start is not), and move only the others. The
-    /// k1 axis then stays dark up to N, as N-rooks' does, beyond the loss's frequency grid, and in 4D
-    /// xy keeps the start's structure. Use it, with --init padded-pmj02 in 4D, for tables applied
+    /// [s/N, (s+1)/N) at its centre (by rank if the start is not stratified), and move only the
+    /// others. The k1 axis then stays dark up to N, beyond the loss's frequency grid, and in 4D xy
+    /// keeps the start's structure. Use it, with --init padded-pmj02 in 4D, for tables applied
     /// through the transported shear (widened hairline, double wedge)
     #[arg(long)]
     pub latin: bool,

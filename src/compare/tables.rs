@@ -123,7 +123,7 @@ impl TableCache {
     /// The cached table's file, optimized and written first if missing, and its optimization time.
     fn table(&self, source: &Path, target: &Target, n: usize) -> Result<(PathBuf, f64)> {
         let key = format!(
-            "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|annular={DEFAULT_ANNULAR_WEIGHT}|v4",
+            "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|annular={DEFAULT_ANNULAR_WEIGHT}|centred|v5",
             self.sets, self.seed
         );
         let stem = source

@@ -5,7 +5,11 @@
 //! coordinate onto the whole sheared axis. The edge's periodic extension in that frame jumps where the
 //! coordinate wraps: an edge aligned with the pattern's axis, whose spectrum is the whole `k1` axis up
 //! to `N` and beyond, where the loss's grid does not reach. An N-stratified coordinate gives that axis
-//! the N-rooks hairline (`E[P(k1, 0)] = 1 − sinc²(k1/N)` for independent offsets). In 4D, holding `x`
+//! the N-rooks hairline: `E[P(k1, 0)] = 1 − sinc²(k1/N)` for random offsets in the strata, and exactly
+//! 0 for `0 < |k1| < N` when every point sits at the centre of its stratum, as here (the random
+//! toroidal shift of every use keeps the estimates unbiased). Against the edge's `|k1|^−2` that is the
+//! difference between a floor of about `1 / (6 N²)` and `1 / (12 N²)` in the variance; on the fan of
+//! edges at N = 1024 centring cut the double-wedge table's MSE from 3.7e-7 to 3.0e-7. In 4D, holding `x`
 //! and `y` also keeps the start's `xy` projection, which a depth-of-field pixel seen through the
 //! oracle's shear depends on most: a PMJ02 start keeps its (0,2)-net there.
 //!
@@ -15,23 +19,12 @@
 //! 4.8e-6 on the renderer's hairline pixel, where holding a PMJ02 `xy` gives 3.0e-7 (2.0e-6 on the
 //! edge).
 
-use crate::rng::Rng;
-use rand::Rng as _;
-
-/// Makes coordinates `coords` of `set` (`[n, dims]`, in `[0, 1)`) N-stratified: a coordinate that
-/// already has one point per stratum is left as it is; otherwise the point of rank `r` (ties by index)
-/// goes to `(r + U) / N`, `U` uniform from `rng`.
-pub fn stratify(set: &mut [f64], n: usize, dims: usize, coords: &[usize], rng: &mut Rng) {
+/// Makes coordinates `coords` of `set` (`[n, dims]`, in `[0, 1)`) N-stratified and centred: the point of
+/// rank `r` (ties by index) goes to `(r + ½) / N`. A coordinate that already has one point per
+/// stratum keeps each point in its stratum, at its centre.
+pub fn stratify(set: &mut [f64], n: usize, dims: usize, coords: &[usize]) {
     let nf = n as f64;
     for &d in coords {
-        let mut seen = vec![false; n];
-        let stratified = (0..n).all(|j| {
-            let s = ((set[j * dims + d] * nf) as usize).min(n - 1);
-            !std::mem::replace(&mut seen[s], true)
-        });
-        if stratified {
-            continue;
-        }
         let mut order: Vec<usize> = (0..n).collect();
         order.sort_by(|&a, &b| {
             set[a * dims + d]
@@ -39,8 +32,7 @@ pub fn stratify(set: &mut [f64], n: usize, dims: usize, coords: &[usize], rng: &
                 .then(a.cmp(&b))
         });
         for (rank, &j) in order.iter().enumerate() {
-            let x = (rank as f64 + rng.random::<f64>()) / nf;
-            set[j * dims + d] = x.min(1.0 - f64::EPSILON);
+            set[j * dims + d] = (rank as f64 + 0.5) / nf;
         }
     }
 }
@@ -56,6 +48,7 @@ pub fn frozen(n: usize, dims: usize, coords: &[usize]) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::Rng as _;
 
     #[test]
     fn stratify_gives_one_point_per_stratum_and_keeps_the_order() {
@@ -63,16 +56,19 @@ mod tests {
         let mut rng = crate::rng::stream(3, 0);
         let mut set: Vec<f64> = (0..2 * n).map(|_| rng.random::<f64>()).collect();
         let before = set.clone();
-        stratify(&mut set, n, 2, &[0], &mut rng);
+        stratify(&mut set, n, 2, &[0]);
         let mut strata: Vec<usize> = set
             .chunks_exact(2)
             .map(|p| (p[0] * n as f64) as usize)
             .collect();
         strata.sort_unstable();
         assert_eq!(strata, (0..n).collect::<Vec<_>>());
+        assert!(set
+            .chunks_exact(2)
+            .all(|p| (p[0] * n as f64).fract() == 0.5));
         let again = set.clone();
-        stratify(&mut set, n, 2, &[0], &mut rng);
-        assert_eq!(set, again, "a stratified set is left as it is");
+        stratify(&mut set, n, 2, &[0]);
+        assert_eq!(set, again, "a stratified, centred set is left as it is");
         for (a, b) in before.chunks_exact(2).zip(set.chunks_exact(2)) {
             assert_eq!(a[1], b[1], "the free coordinate must not move");
         }

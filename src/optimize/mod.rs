@@ -6,7 +6,7 @@
 //! - [`solver`]: argmin L-BFGS in rounds, with steepest descent as the fallback; limits on iterations,
 //!   time and tolerance; a log of loss against iteration and time.
 //! - [`metrics`]: the fit of the expected spectrum to the target.
-//! - [`latin`]: holds the first coordinates N-stratified where the start put them (tables used
+//! - [`latin`]: holds the first coordinates N-stratified, at their strata's centres (tables used
 //!   through the seam-free shear need it).
 //! - [`optimize_sets`]: many sets in parallel, set `s` seeded by `rng::stream(seed, s)`.
 //!
@@ -71,7 +71,7 @@ pub struct Setup {
     /// around the `k1` axis keeps and widens; random starts end in poorer local minima.
     pub init: Option<String>,
     /// Hold the first coordinate of each targeted pair (2D: the first coordinate; 4D: `x` and `y`)
-    /// where the start put them, N-stratified (see [`latin`]), and move only the others: the `k1`
+    /// where the start put them, N-stratified and centred (see [`latin`]), and move only the others: the `k1`
     /// axis of the target's projections then stays dark up to `N`, far beyond the loss's grid, and in
     /// 4D the `xy` projection keeps the start's structure (a (0,2)-net from a PMJ02 start).
     pub latin: bool,
@@ -290,7 +290,7 @@ pub fn optimize_set(
     let frozen = latin.then(|| {
         let (n, dims) = (objective.n, objective.dims);
         let coords = latin_coords(dims);
-        latin::stratify(&mut set, n, dims, &coords, rng);
+        latin::stratify(&mut set, n, dims, &coords);
         latin::frozen(n, dims, &coords)
     });
     let out = solver::minimize(objective, &set, limits, frozen.as_deref());

@@ -123,7 +123,7 @@ impl TableCache {
     /// The cached table's file, optimized and written first if missing, and its optimization time.
     fn table(&self, source: &Path, target: &Target, n: usize) -> Result<(PathBuf, f64)> {
         let key = format!(
-            "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|annular={DEFAULT_ANNULAR_WEIGHT}|centred|v5",
+            "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|annular={DEFAULT_ANNULAR_WEIGHT}|centred|v6",
             self.sets, self.seed
         );
         let stem = source
@@ -159,10 +159,27 @@ impl TableCache {
             annular_weight: DEFAULT_ANNULAR_WEIGHT,
         };
         let started = std::time::Instant::now();
-        let (points, _) = optimize_sets(&setup, self.sets, self.seed, &|_| {})?;
+        let (points, reports) = optimize_sets(&setup, self.sets, self.seed, &|_| {})?;
         let seconds = started.elapsed().as_secs_f64();
+        let timed_out = reports
+            .iter()
+            .filter(|r| r.iterations < TABLE_ITERATIONS && r.stop.starts_with("time limit"))
+            .count();
+        if timed_out > 0 {
+            eprintln!(
+                "warning: {timed_out} of {} sets of the {} table at N = {n} stopped at the time limit \
+                 ({} s) before {TABLE_ITERATIONS} iterations; the table depends on this machine's \
+                 speed. Raise table_seconds in the compare config",
+                self.sets,
+                source.display(),
+                self.seconds
+            );
+        }
         write_points(&path, &points)?;
-        let sidecar = serde_json::json!({ "key": key, "seconds": seconds, "target": source.display().to_string() });
+        let sidecar = serde_json::json!({
+            "key": key, "seconds": seconds, "target": source.display().to_string(),
+            "sets_stopped_by_time_limit": timed_out,
+        });
         crate::output::write_atomic(&meta, |w| {
             use std::io::Write;
             writeln!(w, "{sidecar:#}")

@@ -12,12 +12,13 @@
 //! row and column `−K/2` carry `W = 0`), `G = Σ_k W (P − T) F(k) 2πi (k1 + i k2) exp(+2πi k·x_j)` has
 //! `Re G = Σ … k1 …` and `Im G = Σ … k2 …`, both real sums; the gradient is `(4/N) (Re G, Im G)`.
 //!
-//! Annular means (per term, optional): the fit criterion of issue 5 compares the mean of `P` and of
-//! `T` over the non-dark cells of each annulus `round(|k|) = r` ([`TargetGrid::annulus`]). The loss
-//! can add `λ_a / A · Σ_r m_r²`, `m_r` the mean residual `P − T` over annulus `r` and `A` the number
-//! of annuli; its derivative `2 λ_a m_r / (A n_r)` joins `2 W (P − T)` in the same type-2 transform.
-//! Without it the energy pushed out of a large dark region piles up in the annuli nearby, a bias the
-//! per-cell term barely sees under the periodogram's per-cell noise.
+//! Annular means (per term, optional): the fit criterion ([`super::metrics::Fit`]) compares the
+//! means of `P` and of `T` over the non-dark cells of each annulus `round(|k|) = r`
+//! ([`TargetGrid::annulus`]). The loss can add `λ_a / A · Σ_r m_r²`, `m_r` the mean residual `P − T`
+//! over annulus `r` and `A` the number of annuli; its derivative `2 λ_a m_r / (A n_r)` joins
+//! `2 W (P − T)` in the same type-2 transform. Without it the energy pushed out of a large dark region
+//! piles up in the annuli nearby, a bias the per-cell term barely sees under the periodogram's
+//! per-cell noise.
 //!
 //! Repulsion (per constrained projection, on the torus): `E = (λ / N) Σ_{pairs, d < r} (1 − d²/r²)²`
 //! with `r = radius / sqrt(N)`; smooth (`C¹`), zero beyond `r`, found with kiddo periodic radius queries.

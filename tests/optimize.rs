@@ -170,15 +170,18 @@ fn nufft_gradient_matches_exact_gradient() {
     }
 }
 
+/// Every target file in `targets/`.
+const SHIPPED_TARGETS: [&str; 5] = [
+    "hairline.toml",
+    "double-wedge.toml",
+    "blue-noise.toml",
+    "image-ellipse.toml",
+    "widened-hairline.toml",
+];
+
 #[test]
 fn target_files_are_strict() {
-    for name in [
-        "hairline.toml",
-        "double-wedge.toml",
-        "blue-noise.toml",
-        "image-ellipse.toml",
-        "widened-hairline.toml",
-    ] {
+    for name in SHIPPED_TARGETS {
         let t = Target::load(&shipped(name)).unwrap();
         for n in [64, 256, 1024, 4096] {
             t.grid(n).unwrap_or_else(|e| panic!("{name} at N={n}: {e}"));
@@ -235,13 +238,7 @@ fn shipped_targets_fit_at_256() {
     let n = 256;
     let sets = 8;
     let mut failures = Vec::new();
-    for name in [
-        "hairline.toml",
-        "double-wedge.toml",
-        "blue-noise.toml",
-        "image-ellipse.toml",
-        "widened-hairline.toml",
-    ] {
+    for name in SHIPPED_TARGETS {
         let target = Target::load(&shipped(name)).unwrap();
         let setup = Setup {
             target,

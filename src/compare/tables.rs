@@ -9,6 +9,7 @@
 
 use super::config::CompareConfig;
 use crate::error::Result;
+use crate::optimize::solver::TIME_LIMIT_STOP;
 use crate::optimize::{
     optimize_sets, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT, DEFAULT_REPULSION,
 };
@@ -163,7 +164,7 @@ impl TableCache {
         let seconds = started.elapsed().as_secs_f64();
         let timed_out = reports
             .iter()
-            .filter(|r| r.iterations < TABLE_ITERATIONS && r.stop.starts_with("time limit"))
+            .filter(|r| r.stop.starts_with(TIME_LIMIT_STOP))
             .count();
         if timed_out > 0 {
             eprintln!(

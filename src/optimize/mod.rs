@@ -71,9 +71,10 @@ pub struct Setup {
     /// around the `k1` axis keeps and widens; random starts end in poorer local minima.
     pub init: Option<String>,
     /// Hold the first coordinate of each targeted pair (2D: the first coordinate; 4D: `x` and `y`)
-    /// where the start put them, N-stratified and centred (see [`latin`]), and move only the others: the `k1`
-    /// axis of the target's projections then stays dark up to `N`, far beyond the loss's grid, and in
-    /// 4D the `xy` projection keeps the start's structure (a (0,2)-net from a PMJ02 start).
+    /// where the start put them, N-stratified and centred (see [`latin`]), and move only the others:
+    /// the `k1` axis of the target's projections then stays dark up to `N`, far beyond the loss's
+    /// grid, and in 4D the `xy` projection keeps the start's structure (a (0,2)-net from a PMJ02
+    /// start).
     pub latin: bool,
     /// Weight `λ_a` of the loss's annular-mean term (see [`loss`]); 0 switches it off.
     pub annular_weight: f64,
@@ -255,8 +256,7 @@ pub fn latin_coords(dims: usize) -> Vec<usize> {
 }
 
 /// Optimizes one set from `start` (`[n, dims]`, in `[0,1)`), with [`latin_coords`] held (after
-/// [`latin::stratify`]) if `latin`. `rng` breaks ties between duplicate points and draws stratum
-/// offsets. Fails with `Error::Numerical` if the start's loss is not finite.
+/// [`latin::stratify`]) if `latin`. `rng` moves apart duplicate points. Fails with `Error::Numerical` if the start's loss is not finite.
 pub fn optimize_set(
     objective: &Objective,
     start: &[f64],

@@ -14,6 +14,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+/// How the stop reason of a run ended by its time limit begins.
+pub const TIME_LIMIT_STOP: &str = "time limit";
+
 /// Iterations of one steepest-descent round before L-BFGS is tried again.
 const FALLBACK_ITERS: u64 = 50;
 
@@ -260,7 +263,7 @@ pub fn minimize(
             break format!("iteration limit ({}) reached", limits.max_iters);
         }
         if elapsed >= limits.max_seconds {
-            break format!("time limit ({} s) reached", limits.max_seconds);
+            break format!("{TIME_LIMIT_STOP} ({} s) reached", limits.max_seconds);
         }
         let problem = Problem {
             objective,

@@ -346,7 +346,9 @@ fn write_markdown(
         writeln!(
             w,
             "MSE at N = {} when the oracle's shear is scaled by (1 + error); in brackets, the gain over the best classical \
-             sampler on that integrand at the same N (best classical MSE / this MSE; above 1 is a gain).\n",
+             sampler on that integrand at the same N (best classical MSE / this MSE; above 1 is a gain). Tables keep \
+             the shape built for the true shear range; a table for a range that holds an in-focus layer is designed \
+             in that layer's frame and not sheared, so the error does not move it.\n",
             c.ns.iter().max().unwrap_or(&0)
         )?;
         let mut errors = vec![0.0];

@@ -147,8 +147,8 @@ pub struct Study {
     pub points: Vec<ConvergePoint>,
     /// `MSE ∝ N^slope`.
     pub fit: Option<SlopeFit>,
-    /// One-off set-up time (table optimization), seconds.
-    pub setup_seconds: f64,
+    /// One-off set-up time (the optimization of the table for that N), seconds, one per point.
+    pub setup_seconds: Vec<f64>,
 }
 
 /// The robustness of one sampler to an error of the oracle's shear, at the largest N.
@@ -263,10 +263,10 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
     for s in &subjects {
         for spec in &specs {
             let mut points = Vec::new();
-            let mut setup = 0.0;
+            let mut setup = Vec::new();
             for &n in &config.ns {
                 let (sampler, seconds) = instantiate(spec, s.shear, s.shear_range, n, &tables)?;
-                setup += seconds;
+                setup.push(seconds);
                 let n = usable_n(sampler.as_ref(), n);
                 points.push(measure(sampler.as_ref(), s.integrand.as_ref(), n, &cfg)?);
             }

@@ -290,10 +290,10 @@ fn widened_hairline_gains_under_oracle_error() {
 ///
 /// Asserted: at N = 256 and 1024 the table beats every one of them by more than 3 combined standard
 /// errors. Not met: the goal of 3× over the best classical sampler at N = 1024. Measured (R = 1024,
-/// fan offset c = 0.7, Sobol start): 2.41 ± 0.16× over sheared MJ on the xu plane, 2.8–4.0× over
-/// unsheared Sobol and PMJ02, but only 1.37× over sheared PMJ02 and 1.31× over sheared Sobol on the xu
-/// plane, the strongest classical samplers here (N = 256: 2.23×, 1.41×, 1.50×); at N = 64, 1.3–1.8×
-/// over the sheared ones, which is not asserted.
+/// fan offset c = 0.7, Sobol start, dark weight 20000): 2.60 ± 0.17× over sheared MJ on the xu plane,
+/// 3.0–4.3× over unsheared Sobol and PMJ02, but only 1.47× over sheared PMJ02 and 1.41× over sheared
+/// Sobol on the xu plane, the strongest classical samplers here (N = 256: 2.33×, 1.47×, 1.56×); at
+/// N = 64, 1.3–1.8× over the sheared ones, which is not asserted.
 #[test]
 fn double_wedge_gains_on_the_fan() {
     let dir = tempfile::tempdir().unwrap();

@@ -10,7 +10,7 @@ use std::io::{BufWriter, Write};
 use std::path::Path;
 
 /// Writes `path` atomically: `fill` writes into a temporary file in the same folder, which is renamed
-/// onto `path` only if `fill` succeeds.
+/// onto `path` only if `fill` succeeds. The file gets the permissions `File::create` would give it.
 pub fn write_atomic<F>(path: &Path, fill: F) -> Result<()>
 where
     F: FnOnce(&mut BufWriter<&mut std::fs::File>) -> std::io::Result<()>,
@@ -22,8 +22,13 @@ where
     if !dir.is_dir() {
         std::fs::create_dir_all(dir).map_err(|e| Error::io("create the folder", dir, e))?;
     }
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".anisospec-")
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".anisospec-");
+    // A temporary file is created owner-only (0600); an output is an ordinary file, 0666 less the
+    // umask, as `File::create` makes it (a report folder others can read).
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder
         .tempfile_in(dir)
         .map_err(|e| Error::io("create a temporary file in", dir, e))?;
     {
@@ -80,4 +85,29 @@ pub fn ensure_not_input(output: &Path, input: Option<&Path>) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::*;
+
+    /// An atomically written file has the mode a plain `File::create` gives (0666 less the umask), not
+    /// the owner-only mode of the temporary file it started as.
+    #[test]
+    fn atomic_writes_get_ordinary_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let plain = dir.path().join("plain.txt");
+        std::fs::File::create(&plain).unwrap();
+        let atomic = dir.path().join("atomic.txt");
+        write_atomic(&atomic, |w| writeln!(w, "x")).unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(
+            mode(&atomic),
+            mode(&plain),
+            "mode {:o}, File::create gives {:o}",
+            mode(&atomic),
+            mode(&plain)
+        );
+    }
 }

@@ -55,7 +55,10 @@ fn plot_error(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::Numerical(format!("cannot draw the plot {}: {e}", path.display()))
 }
 
-/// The axis range `[lo, hi]` padded by a fraction of a decade on each side.
+/// The axis range `[lo, hi]` padded by a fraction of a decade on each side, and widened to the
+/// enclosing decades when it holds no power of ten: plotters puts a log axis's ticks and labels at the
+/// powers of ten in range (and between them), so a range inside one decade (N = 16 to 64) would get an
+/// axis with no label at all.
 fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     let (lo, hi) = values
         .filter(|v| v.is_finite() && *v > 0.0)
@@ -71,7 +74,15 @@ fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
         (lo / 2.0, hi * 2.0)
     };
     let pad = ((hi / lo).log10() * 0.05).max(0.05);
-    Some((lo / 10f64.powf(pad), hi * 10f64.powf(pad)))
+    let (lo, hi) = (lo / 10f64.powf(pad), hi * 10f64.powf(pad));
+    if 10f64.powf(lo.log10().ceil()) <= hi {
+        Some((lo, hi))
+    } else {
+        Some((
+            10f64.powf(lo.log10().floor()),
+            10f64.powf(hi.log10().ceil()),
+        ))
+    }
 }
 
 /// Draws `plot` and writes it to `path` as an RGB PNG (atomically).
@@ -225,5 +236,31 @@ mod tests {
             }
         )
         .is_err());
+    }
+
+    /// Every axis range holds a power of ten (where plotters puts its labels) and all the values.
+    #[test]
+    fn log_ranges_hold_a_power_of_ten() {
+        for values in [
+            vec![16.0, 64.0],
+            vec![2e-4, 8e-4],
+            vec![3.0],
+            vec![0.011, 0.09],
+            vec![16.0, 1024.0],
+            vec![1e-6, 1e-6],
+        ] {
+            let (lo, hi) = log_range(values.iter().copied()).unwrap();
+            assert!(
+                values.iter().all(|&v| lo < v && v < hi),
+                "{values:?}: [{lo}, {hi}]"
+            );
+            let decade = 10f64.powf(lo.log10().ceil());
+            assert!(
+                decade <= hi,
+                "{values:?}: [{lo}, {hi}] holds no power of ten"
+            );
+        }
+        // Within a decade: the enclosing one, not more.
+        assert_eq!(log_range([16.0, 64.0].into_iter()), Some((10.0, 100.0)));
     }
 }

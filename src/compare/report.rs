@@ -1,6 +1,7 @@
 //! The compare report folder: `report.md` with tables, convergence and speed-against-error plots, a
 //! spectra gallery per sampler, and CSV / npy of every number.
 
+use super::config::CompareConfig;
 use super::tables::TableCache;
 use super::{instantiate, usable_n, Outcome, SamplerSpec, Study, SubjectInfo};
 use crate::converge::{plot, Convergence};
@@ -55,12 +56,7 @@ pub fn write(
             &studies,
             outcome.config.realizations,
         )?;
-        write_speed_plot(
-            &out.join(&speed),
-            label,
-            &studies,
-            outcome.config.realizations,
-        )?;
+        write_speed_plot(&out.join(&speed), label, &studies, &outcome.config)?;
         plots.push((conv, speed));
     }
     let gallery = write_gallery(outcome, specs, tables, out)?;
@@ -163,7 +159,13 @@ fn write_convergence_plot(path: &Path, label: &str, studies: &[&Study], r: usize
     )
 }
 
-fn write_speed_plot(path: &Path, label: &str, studies: &[&Study], r: usize) -> Result<()> {
+fn write_speed_plot(
+    path: &Path,
+    label: &str,
+    studies: &[&Study],
+    config: &CompareConfig,
+) -> Result<()> {
+    let r = config.realizations;
     let series = studies
         .iter()
         .map(|s| Series {
@@ -181,7 +183,11 @@ fn write_speed_plot(path: &Path, label: &str, studies: &[&Study], r: usize) -> R
     write_loglog_png(
         path,
         &LogLogPlot {
-            title: format!("{label}: MSE against time per estimate (N = 16 ... largest)"),
+            title: format!(
+                "{label}: MSE against time per estimate (N = {} to {})",
+                config.ns.iter().min().unwrap_or(&0),
+                config.ns.iter().max().unwrap_or(&0)
+            ),
             x_label: "ms per estimate (generation + evaluation + one-off optimization / R)".into(),
             y_label: "MSE (squared integrand units)".into(),
             series,
@@ -365,12 +371,18 @@ fn write_markdown(
             .map(|r| (&r.subject, &r.sampler))
             .collect();
         keys.dedup();
+        // The robustness rows are at the largest N, wherever it is in `ns`.
+        let at_largest =
+            c.ns.iter()
+                .enumerate()
+                .max_by_key(|&(_, n)| n)
+                .map_or(0, |(i, _)| i);
         for (subject, sampler) in keys {
             let best_classical = outcome
                 .studies
                 .iter()
                 .filter(|s| &s.subject == subject && s.family == "classical")
-                .filter_map(|s| s.points.last().map(|p| p.mse))
+                .filter_map(|s| s.points.get(at_largest).map(|p| p.mse))
                 .fold(f64::INFINITY, f64::min);
             let rows: Vec<_> = outcome
                 .robustness

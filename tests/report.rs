@@ -1,0 +1,615 @@
+//! `anisospec compare` end to end: a tiny study (one analytic edge and one renderer pixel; a classical,
+//! a sheared and an optimized sampler) run through the binary, and its report folder checked against
+//! itself (every link, every PNG, the CSV against the npy arrays and report.md) and against further runs
+//! on the warm cache (tables reused, the same numbers).
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::SystemTime;
+
+/// The study's samplers in report order (classical, sheared, optimized), with their family.
+const SAMPLERS: [(&str, &str); 3] = [
+    ("padded-jittered", "classical"),
+    ("padded-mj sheared (transported)", "sheared"),
+    ("optimized hairline", "optimized"),
+];
+/// The analytic integrand's label.
+const EDGE: &str = "hairline edge in xu";
+/// The robustness study's shear errors: the exact oracle, then the config's `oracle_errors`.
+const SHEAR_ERRORS: [f64; 2] = [0.0, 0.1];
+/// Realizations per N.
+const REALIZATIONS: usize = 8;
+/// Points and grid side K of the spectra gallery.
+const SPECTRA_N: usize = 64;
+const SPECTRA_RES: usize = 16;
+
+/// The study over the sizes `ns`: a hairline edge and the default scene's hairline pixel, one
+/// sampler of each family, a 2-set optimized hairline table. Under a second per run on 2 cores in
+/// the (optimized) test profile, about 7 s unoptimized.
+fn study(ns: &[usize]) -> String {
+    let target = Path::new(env!("CARGO_MANIFEST_DIR")).join("targets/hairline.toml");
+    format!(
+        r#"ns = {ns:?}
+realizations = {REALIZATIONS}
+seed = 7
+classical = ["padded-jittered"]
+sheared = ["padded-mj"]
+shear_modes = ["transported"]
+tables = ['{}']
+table_sets = 2
+table_seconds = 600.0
+pixel_classes = ["hairline"]
+pixel_reference_count = 4096
+oracle_errors = [0.1]
+spectra_n = {SPECTRA_N}
+spectra_res = {SPECTRA_RES}
+spectra_realizations = 2
+
+[[analytic]]
+label = "{EDGE}"
+spec = "sheared:s=0.5,c=0.7@xu"
+shear = [0.5, 0.5]
+shear_range = [0.5, 0.5]
+"#,
+        target.display()
+    )
+}
+
+fn anisospec(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_anisospec"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+/// Writes `config` to `dir/name.toml`, runs compare with the report in `dir/name` and the cache
+/// `cache`, and returns the report folder.
+fn compare(dir: &Path, name: &str, config: &str, cache: &Path) -> PathBuf {
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, config).unwrap();
+    let out = dir.join(name);
+    let o = anisospec(&[
+        "compare",
+        "--config",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ]);
+    assert!(
+        o.status.success(),
+        "compare exited {:?}: {}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    out
+}
+
+/// The N a sampler of the study makes when asked for `n` (a table is built for exactly `n`).
+fn usable(sampler: &str, n: usize) -> usize {
+    match sampler.split(' ').next().unwrap() {
+        "optimized" => n,
+        name => {
+            anisospec::compare::usable_n(anisospec::samplers::build(name, 4).unwrap().as_ref(), n)
+        }
+    }
+}
+
+/// A CSV file as its header and rows of named fields. Fields may be quoted (labels hold commas);
+/// every row has as many fields as the header.
+fn read_csv(path: &Path) -> (Vec<String>, Vec<BTreeMap<String, String>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let split = |line: &str| {
+        let (mut fields, mut field, mut quoted) = (Vec::new(), String::new(), false);
+        for c in line.chars() {
+            match c {
+                '"' => quoted = !quoted,
+                ',' if !quoted => fields.push(std::mem::take(&mut field)),
+                _ => field.push(c),
+            }
+        }
+        assert!(!quoted, "{}: unbalanced quotes in {line}", path.display());
+        fields.push(field);
+        fields
+    };
+    let mut lines = text.lines();
+    let header = split(lines.next().expect("a header line"));
+    let rows = lines
+        .map(|line| {
+            let fields = split(line);
+            assert_eq!(
+                fields.len(),
+                header.len(),
+                "{}: '{line}' against {header:?}",
+                path.display()
+            );
+            header.iter().cloned().zip(fields).collect()
+        })
+        .collect();
+    (header, rows)
+}
+
+/// A finite number from a CSV field.
+fn num(row: &BTreeMap<String, String>, key: &str) -> f64 {
+    let text = &row[key];
+    let v: f64 = text
+        .parse()
+        .unwrap_or_else(|e| panic!("{key} = '{text}': {e}"));
+    assert!(v.is_finite(), "{key} = {v} in {row:?}");
+    v
+}
+
+fn read_npy(path: &Path) -> (Vec<u64>, Vec<f64>) {
+    let bytes = std::fs::read(path).unwrap();
+    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
+    let shape = npy.shape().to_vec();
+    (shape, npy.into_vec().unwrap())
+}
+
+/// One row of convergence.csv.
+#[derive(Clone, Debug, PartialEq)]
+struct Point {
+    subject: String,
+    class: String,
+    sampler: String,
+    n: usize,
+    mse: f64,
+    mse_stderr: f64,
+    seconds_per_estimate: f64,
+    setup_seconds: f64,
+    slope: [f64; 3],
+}
+
+/// report.md as its level-2 sections: the heading, the rows of its tables (cells trimmed, separator
+/// rows dropped) and its links `(text, target)`.
+struct Section {
+    heading: String,
+    rows: Vec<Vec<String>>,
+    links: Vec<(String, String)>,
+}
+
+fn read_markdown(path: &Path) -> Vec<Section> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut sections: Vec<Section> = Vec::new();
+    for line in text.lines() {
+        if let Some(heading) = line.strip_prefix("## ") {
+            sections.push(Section {
+                heading: heading.to_string(),
+                rows: Vec::new(),
+                links: Vec::new(),
+            });
+            continue;
+        }
+        let Some(section) = sections.last_mut() else {
+            continue;
+        };
+        if line.starts_with("|---") {
+            continue;
+        }
+        if line.starts_with('|') {
+            let cells = line.trim().trim_matches('|').split('|');
+            section
+                .rows
+                .push(cells.map(|c| c.trim().to_string()).collect());
+        }
+        let mut rest = line;
+        while let Some(start) = rest.find("![") {
+            let (text, after) = rest[start + 2..].split_once("](").expect("a link target");
+            let (target, after) = after.split_once(')').expect("a closed link");
+            section.links.push((text.to_string(), target.to_string()));
+            rest = after;
+        }
+    }
+    sections
+}
+
+/// Every file under `dir`, relative to it.
+fn files_under(dir: &Path) -> BTreeSet<PathBuf> {
+    let mut out = BTreeSet::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else {
+                out.insert(path.strip_prefix(dir).unwrap().to_path_buf());
+            }
+        }
+    }
+    out
+}
+
+/// Decodes a PNG and checks it is a picture: at least 400 x 200 pixels, many colours, and mostly
+/// not one flat colour.
+fn check_png(path: &Path) {
+    let bytes = std::fs::read(path).unwrap();
+    let mut reader = png::Decoder::new(std::io::Cursor::new(bytes))
+        .read_info()
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert!(
+        info.width >= 400 && info.height >= 200,
+        "{}: {} x {}",
+        path.display(),
+        info.width,
+        info.height
+    );
+    assert_eq!(info.bit_depth, png::BitDepth::Eight, "{}", path.display());
+    let bpp = info.color_type.samples();
+    let mut counts: BTreeMap<&[u8], usize> = BTreeMap::new();
+    for px in buf[..info.buffer_size()].chunks_exact(bpp) {
+        *counts.entry(px).or_default() += 1;
+    }
+    let pixels = (info.width * info.height) as usize;
+    let flat = counts.values().max().unwrap();
+    assert!(
+        counts.len() >= 16 && *flat < pixels * 99 / 100,
+        "{}: {} colours, the commonest on {flat} of {pixels} pixels",
+        path.display(),
+        counts.len()
+    );
+}
+
+/// Checks the report folder `out` of a study over `ns` and returns its convergence rows.
+fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
+    let report = out.join("report.md");
+    let text = std::fs::read_to_string(&report).unwrap();
+    let sections = read_markdown(&report);
+    let section = |heading: &str| {
+        sections
+            .iter()
+            .find(|s| s.heading == heading)
+            .unwrap_or_else(|| panic!("report.md has no section '{heading}'"))
+    };
+
+    // convergence.csv: one row per (integrand, sampler, N), integrand-major, samplers and N in config
+    // order; positive MSE, finite slopes.
+    let (_, rows) = read_csv(&out.join("convergence.csv"));
+    let points: Vec<Point> = rows
+        .iter()
+        .map(|r| Point {
+            subject: r["subject"].clone(),
+            class: r["class"].clone(),
+            sampler: r["sampler"].clone(),
+            n: r["n"].parse().unwrap(),
+            mse: num(r, "mse"),
+            mse_stderr: num(r, "mse_stderr"),
+            seconds_per_estimate: num(r, "seconds_per_estimate"),
+            setup_seconds: num(r, "setup_seconds"),
+            slope: [
+                num(r, "slope"),
+                num(r, "slope_ci_low"),
+                num(r, "slope_ci_high"),
+            ],
+        })
+        .collect();
+    let subjects: Vec<(String, String)> = section("Integrands").rows[1..]
+        .iter()
+        .map(|r| (r[0].clone(), r[1].clone()))
+        .collect();
+    assert_eq!(subjects.len(), 2, "{subjects:?}");
+    assert_eq!(subjects[0], (EDGE.to_string(), "analytic".to_string()));
+    assert_eq!(subjects[1].1, "hairline");
+    assert_eq!(points.len(), subjects.len() * SAMPLERS.len() * ns.len());
+    let studies: Vec<&[Point]> = points.chunks(ns.len()).collect();
+    for (i, study) in studies.iter().enumerate() {
+        let (subject, class) = &subjects[i / SAMPLERS.len()];
+        let (sampler, family) = SAMPLERS[i % SAMPLERS.len()];
+        for ((p, row), &n) in study.iter().zip(&rows[i * ns.len()..]).zip(ns) {
+            assert_eq!(
+                (&p.subject, &p.class, p.sampler.as_str(), p.n),
+                (subject, class, sampler, usable(sampler, n)),
+            );
+            assert_eq!(row["family"], family);
+            assert!(p.mse > 0.0 && p.mse_stderr >= 0.0, "{p:?}");
+            assert!(p.seconds_per_estimate > 0.0, "{p:?}");
+            // Only a table has a one-off set-up: its own optimization at that N.
+            assert_eq!(p.setup_seconds > 0.0, family == "optimized", "{p:?}");
+            assert_eq!(p.slope, study[0].slope, "one fit per study");
+        }
+        // With two N the fit goes through both points, whatever their weights.
+        let (a, b) = (&study[0], &study[1]);
+        let through = (b.mse / a.mse).ln() / (b.n as f64 / a.n as f64).ln();
+        let [slope, lo, hi] = a.slope;
+        assert!((slope - through).abs() < 1e-9, "{slope} vs {through}");
+        assert!(lo <= slope && slope <= hi, "{:?}", a.slope);
+    }
+
+    // The arrays [integrand, sampler, N] hold the CSV's numbers bit for bit (the CSV prints the
+    // shortest text that reads back as the same f64).
+    let shape = [subjects.len(), SAMPLERS.len(), ns.len()].map(|s| s as u64);
+    let columns: [(&str, Vec<f64>); 4] = [
+        ("mse", points.iter().map(|p| p.mse).collect()),
+        ("mse_stderr", points.iter().map(|p| p.mse_stderr).collect()),
+        ("n", points.iter().map(|p| p.n as f64).collect()),
+        (
+            "seconds_per_estimate",
+            points.iter().map(|p| p.seconds_per_estimate).collect(),
+        ),
+    ];
+    for (name, column) in columns {
+        let (s, values) = read_npy(&out.join(format!("{name}.npy")));
+        assert_eq!(s, shape, "{name}.npy");
+        let csv: Vec<u64> = column.iter().map(|v| v.to_bits()).collect();
+        let npy: Vec<u64> = values.iter().map(|v| v.to_bits()).collect();
+        assert_eq!(npy, csv, "{name}.npy against convergence.csv");
+    }
+
+    // report.md: per integrand, a header naming every N and a row per sampler printing the CSV's
+    // numbers; the columns "at N=" are at the last N of the config.
+    let best_classical = |subject: &str, at: usize| {
+        points
+            .chunks(ns.len())
+            .filter(|s| s[0].subject == subject && s[0].sampler == SAMPLERS[0].0)
+            .map(|s| s[at].mse)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let last = ns.len() - 1;
+    let mut plots = Vec::new();
+    for (subject, _) in &subjects {
+        let section = section(subject);
+        let mut header = vec!["sampler".to_string(), "family".to_string()];
+        header.extend(ns.iter().map(|n| format!("MSE at N={n}")));
+        header.extend([
+            "slope [95% CI]".to_string(),
+            format!("ms/estimate at N={}", ns[last]),
+            format!("set-up s at N={}", ns[last]),
+            format!("gain over best classical at N={}", ns[last]),
+        ]);
+        assert_eq!(section.rows[0], header, "{subject}");
+        assert_eq!(section.rows.len(), 1 + SAMPLERS.len(), "{subject}");
+        for (row, (sampler, family)) in section.rows[1..].iter().zip(SAMPLERS) {
+            let study = studies
+                .iter()
+                .find(|s| &s[0].subject == subject && s[0].sampler == sampler)
+                .unwrap();
+            let mut expect = vec![sampler.to_string(), family.to_string()];
+            for (p, &n) in study.iter().zip(ns) {
+                let shown = if p.n == n {
+                    String::new()
+                } else {
+                    format!(" (N={})", p.n)
+                };
+                expect.push(format!("{:.3e} ± {:.1e}{shown}", p.mse, p.mse_stderr));
+            }
+            let [slope, lo, hi] = study[0].slope;
+            let p = &study[last];
+            expect.extend([
+                format!("{slope:.2} [{lo:.2}, {hi:.2}]"),
+                format!("{:.3}", p.seconds_per_estimate * 1e3),
+                format!("{:.2}", p.setup_seconds),
+                format!("{:.2}×", best_classical(subject, last) / p.mse),
+            ]);
+            assert_eq!(row, &expect, "{subject}");
+        }
+        let targets: Vec<&str> = section.links.iter().map(|l| l.1.as_str()).collect();
+        assert_eq!(
+            targets.len(),
+            2,
+            "{subject}: a convergence and a speed plot"
+        );
+        plots.extend(targets);
+    }
+    assert_eq!(
+        plots.iter().collect::<BTreeSet<_>>().len(),
+        plots.len(),
+        "every integrand has its own plots: {plots:?}"
+    );
+
+    // robustness.csv: the sheared and optimized samplers at the largest N on every integrand, per
+    // shear error; at error 0 the same measurement as the study's.
+    let nmax = *ns.iter().max().unwrap();
+    let at_max = ns.iter().position(|&n| n == nmax).unwrap();
+    let (_, rows) = read_csv(&out.join("robustness.csv"));
+    let followers = &SAMPLERS[1..];
+    assert_eq!(
+        rows.len(),
+        subjects.len() * followers.len() * SHEAR_ERRORS.len()
+    );
+    let mut rows = rows.iter();
+    let robustness = &section("Robustness to oracle error").rows;
+    let mut expect_header = vec!["integrand".to_string(), "sampler".to_string()];
+    expect_header.extend(SHEAR_ERRORS.map(|e| format!("error {:+.0}%", e * 100.0)));
+    assert_eq!(robustness[0], expect_header);
+    let mut table_rows = robustness[1..].iter();
+    for (subject, _) in &subjects {
+        for (sampler, _) in followers {
+            let mut expect = vec![subject.clone(), sampler.to_string()];
+            for e in SHEAR_ERRORS {
+                let r = rows.next().unwrap();
+                assert_eq!(
+                    (&r["subject"], r["sampler"].as_str(), num(r, "shear_error")),
+                    (subject, *sampler, e)
+                );
+                assert_eq!(r["n"], usable(sampler, nmax).to_string());
+                let (mse, stderr) = (num(r, "mse"), num(r, "mse_stderr"));
+                assert!(mse > 0.0 && stderr >= 0.0, "{r:?}");
+                if e == 0.0 {
+                    let study = studies
+                        .iter()
+                        .find(|s| &s[0].subject == subject && s[0].sampler == *sampler)
+                        .unwrap();
+                    assert_eq!(
+                        (mse, stderr),
+                        (study[at_max].mse, study[at_max].mse_stderr),
+                        "{subject}, {sampler}: the exact oracle's row is the study's point"
+                    );
+                }
+                expect.push(format!(
+                    "{mse:.2e} ({:.2}×)",
+                    best_classical(subject, at_max) / mse
+                ));
+            }
+            assert_eq!(table_rows.next(), Some(&expect));
+        }
+    }
+    assert_eq!(table_rows.next(), None);
+
+    // The spectra gallery: one sheet per sampler, beside it the npy [projection, K, K] of expected
+    // power spectra, P(0) = N in every projection.
+    let gallery = &section("Spectra").links;
+    let labels: Vec<&str> = gallery.iter().map(|l| l.0.as_str()).collect();
+    assert_eq!(labels, SAMPLERS.map(|s| s.0));
+    let k = SPECTRA_RES;
+    for (label, png) in gallery {
+        let (shape, values) = read_npy(&out.join(png).with_extension("npy"));
+        assert_eq!(shape, [4, k as u64, k as u64], "{label}");
+        assert!(values.iter().all(|v| v.is_finite() && *v >= 0.0), "{label}");
+        for projection in values.chunks_exact(k * k) {
+            let dc = projection[k / 2 * k + k / 2];
+            assert!(
+                (dc / SPECTRA_N as f64 - 1.0).abs() < 1e-6,
+                "{label}: P(0) = {dc}"
+            );
+        }
+    }
+
+    // Every link leads to a decodable picture; every file is a linked picture, a gallery npy beside
+    // one, or a top-level file report.md names; no temporary file is left.
+    let linked: BTreeSet<PathBuf> = sections
+        .iter()
+        .flat_map(|s| s.links.iter().map(|l| PathBuf::from(&l.1)))
+        .collect();
+    assert_eq!(linked.len(), 2 * subjects.len() + SAMPLERS.len());
+    for path in &linked {
+        check_png(&out.join(path));
+    }
+    for file in files_under(out) {
+        let top_level = file.parent() == Some(Path::new(""));
+        let named = top_level && text.contains(&format!("`{}`", file.display()));
+        let gallery_npy = file.starts_with("spectra")
+            && file.extension().is_some_and(|e| e == "npy")
+            && linked.contains(&file.with_extension("png"));
+        assert!(
+            linked.contains(&file) || named || gallery_npy || file == Path::new("report.md"),
+            "{} is in no link and not named in report.md",
+            file.display()
+        );
+    }
+    points
+}
+
+/// Every file under `dir` with its contents and modification time.
+fn snapshot(dir: &Path) -> BTreeMap<PathBuf, (Vec<u8>, SystemTime)> {
+    files_under(dir)
+        .into_iter()
+        .map(|f| {
+            let path = dir.join(&f);
+            let modified = std::fs::metadata(&path).unwrap().modified().unwrap();
+            (f, (std::fs::read(&path).unwrap(), modified))
+        })
+        .collect()
+}
+
+/// The numbers of a run that do not depend on the machine's speed: the rows without their timing.
+fn measured(points: &[Point]) -> Vec<Point> {
+    points
+        .iter()
+        .map(|p| Point {
+            seconds_per_estimate: 0.0,
+            ..p.clone()
+        })
+        .collect()
+}
+
+/// A study runs, writes a consistent report, and runs again on its cache without rebuilding a table
+/// or changing a number; the same study with its sizes reordered and one a sampler cannot make reports
+/// the same measurements.
+#[test]
+fn compare_writes_a_consistent_report_and_reuses_its_cache() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let ns = [16, 64];
+    let first = compare(dir.path(), "first", &study(&ns), &cache);
+    let points = check_report(&first, &ns);
+    let tables = files_under(&cache.join("tables"));
+    assert_eq!(
+        tables
+            .iter()
+            .filter(|f| f.extension().unwrap() == "npy")
+            .count(),
+        ns.len(),
+        "one table per N: {tables:?}"
+    );
+
+    // Again on the warm cache: no cache file rewritten, the same numbers (and the same set-up times,
+    // read back from the tables' sidecars); only the timings differ.
+    let before = snapshot(&cache);
+    let second = compare(dir.path(), "second", &study(&ns), &cache);
+    assert!(
+        before == snapshot(&cache),
+        "the second run rewrote the cache"
+    );
+    let again = check_report(&second, &ns);
+    assert_eq!(measured(&again), measured(&points));
+    for file in ["robustness.csv", "mse.npy", "mse_stderr.npy", "n.npy"]
+        .map(PathBuf::from)
+        .into_iter()
+        .chain(
+            files_under(&first.join("spectra"))
+                .into_iter()
+                .filter(|f| f.extension().unwrap() == "npy")
+                .map(|f| Path::new("spectra").join(f)),
+        )
+    {
+        assert_eq!(
+            std::fs::read(first.join(&file)).unwrap(),
+            std::fs::read(second.join(&file)).unwrap(),
+            "{}",
+            file.display()
+        );
+    }
+
+    // Sizes out of order, one of them (15) not a square, which padded jittered replaces by 16: the
+    // report keeps the config's order and shows the N used, the robustness gains are taken at the
+    // largest N, and every measurement both runs made is the same.
+    let odd = [64, 15];
+    let third = compare(dir.path(), "third", &study(&odd), &cache);
+    let shuffled = check_report(&third, &odd);
+    let key = |p: &Point| (p.subject.clone(), p.sampler.clone(), p.n);
+    let earlier: BTreeMap<_, _> = points.iter().map(|p| (key(p), p)).collect();
+    let mut shared = 0;
+    for p in &shuffled {
+        if let Some(q) = earlier.get(&key(p)) {
+            assert_eq!(
+                (p.mse.to_bits(), p.mse_stderr.to_bits()),
+                (q.mse.to_bits(), q.mse_stderr.to_bits()),
+                "{p:?} vs {q:?}"
+            );
+            shared += 1;
+        }
+    }
+    // Every sampler at 64 and padded jittered at 16, on both integrands.
+    assert_eq!(shared, 2 * (SAMPLERS.len() + 1));
+}
+
+/// A config that passes validation but names an unknown sampler fails with exit code 2, names the
+/// sampler, and leaves no report folder behind.
+#[test]
+fn compare_with_an_unknown_sampler_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("study.toml");
+    std::fs::write(
+        &config,
+        study(&[16, 64]).replace("\"padded-jittered\"", "\"padded-nosuch\""),
+    )
+    .unwrap();
+    let out = dir.path().join("report");
+    let o = anisospec(&[
+        "compare",
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--cache",
+        dir.path().join("cache").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("padded-nosuch"), "{err}");
+    assert!(!out.exists(), "a failed run left {}", out.display());
+}

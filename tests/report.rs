@@ -440,7 +440,7 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
                     );
                 }
                 expect.push(format!(
-                    "{mse:.2e} ({:.2}×)",
+                    "{mse:.2e} ± {stderr:.1e} ({:.2}×)",
                     best_classical(subject, at_max) / mse
                 ));
             }
@@ -448,6 +448,31 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
         }
     }
     assert_eq!(table_rows.next(), None);
+
+    // The summary: per integrand at the largest N, the best classical sampler with its MSE, and the
+    // sampler with the lowest MSE (named first among any that tie) with its gain over it.
+    let summary = &section("Summary").rows;
+    assert_eq!(summary.len(), 1 + subjects.len(), "{summary:?}");
+    for (row, (subject, class)) in summary[1..].iter().zip(&subjects) {
+        let own: Vec<&[Point]> = studies
+            .iter()
+            .filter(|s| &s[0].subject == subject)
+            .copied()
+            .collect();
+        let best = own
+            .iter()
+            .min_by(|a, b| a[at_max].mse.total_cmp(&b[at_max].mse))
+            .unwrap();
+        let classical = best_classical(subject, at_max);
+        assert_eq!((&row[0], &row[1]), (subject, class));
+        assert_eq!(row[2], format!("{} ({classical:.3e})", SAMPLERS[0].0));
+        assert!(
+            row[3].split(" = ").any(|name| name == best[0].sampler),
+            "{subject}: {} is not named best in {row:?}",
+            best[0].sampler
+        );
+        assert_eq!(row[4], format!("{:.2}×", classical / best[at_max].mse));
+    }
 
     // The spectra gallery: one sheet per sampler, beside it the npy [projection, K, K] of expected
     // power spectra, P(0) = N in every projection.

@@ -6,7 +6,7 @@ use super::tables::TableCache;
 use super::{instantiate, usable_n, Outcome, SamplerSpec, Study, SubjectInfo};
 use crate::converge::{plot, Convergence};
 use crate::error::Result;
-use crate::output::plot::{write_loglog_png, LogLogPlot, Series};
+use crate::output::plot::{write_loglog_png, LegendCorner, LogLogPlot, Series};
 use crate::output::sheet::{write_sheet, Panel};
 use crate::output::{write_atomic, write_npy};
 use crate::points::Projection;
@@ -159,40 +159,60 @@ fn write_convergence_plot(path: &Path, label: &str, studies: &[&Study], r: usize
     )
 }
 
+/// MSE against the time per estimate, one solid line per sampler (generation and evaluation); for a
+/// table, also a dashed line of the same colour with its one-off optimization spread over the study's
+/// R estimates (a renderer that reuses the table spreads it over many more).
 fn write_speed_plot(
     path: &Path,
     label: &str,
     studies: &[&Study],
     config: &CompareConfig,
 ) -> Result<()> {
-    let r = config.realizations;
-    let series = studies
-        .iter()
-        .map(|s| Series {
-            label: s.sampler.clone(),
-            points: s
-                .points
+    let r = config.realizations as f64;
+    let mut series = Vec::new();
+    for (i, s) in studies.iter().enumerate() {
+        let per_estimate = |setup: f64| -> Vec<(f64, f64)> {
+            s.points
                 .iter()
                 .zip(&s.setup_seconds)
-                .map(|(p, setup)| ((p.seconds + setup) / r as f64 * 1e3, p.mse))
-                .collect(),
+                .map(|(p, own)| ((p.seconds + setup * own) / r * 1e3, p.mse))
+                .collect()
+        };
+        series.push(Series {
+            label: s.sampler.clone(),
+            points: per_estimate(0.0),
             errors: None,
             dashed: false,
-        })
-        .collect();
+            colour: Some(i),
+        });
+        if s.setup_seconds.iter().any(|&t| t > 0.0) {
+            series.push(Series {
+                label: format!("{}, with set-up / R", s.sampler),
+                points: per_estimate(1.0),
+                errors: None,
+                dashed: true,
+                colour: Some(i),
+            });
+        }
+    }
     write_loglog_png(
         path,
         &LogLogPlot {
             title: format!(
-                "{label}: MSE against time per estimate (N = {} to {})",
+                "{label}: MSE against time per estimate (N = {} to {}, R = {})",
                 config.ns.iter().min().unwrap_or(&0),
-                config.ns.iter().max().unwrap_or(&0)
+                config.ns.iter().max().unwrap_or(&0),
+                config.realizations
             ),
-            x_label: "ms per estimate (generation + evaluation + one-off optimization / R)".into(),
+            x_label: format!(
+                "ms per estimate: generation + evaluation (dashed: + table optimization / R, R = {})",
+                config.realizations
+            ),
             y_label: "MSE (squared integrand units)".into(),
             series,
             width: 1000,
             height: 700,
+            legend: LegendCorner::UpperRight,
         },
     )
 }
@@ -247,7 +267,12 @@ fn write_gallery(
         };
         write_sheet(
             &out.join(&file),
-            &format!("{}{shear_note}: expected power spectra", spec.label()),
+            &format!(
+                "{}{shear_note}: expected power spectra, K = {}, {} realizations",
+                spec.label(),
+                c.spectra_res,
+                c.spectra_realizations
+            ),
             &panels,
             4,
         )?;
@@ -263,6 +288,68 @@ fn write_gallery(
         written.push((spec.label(), file));
     }
     Ok(written)
+}
+
+/// The index in `ns` of the largest N (where the robustness rows and the summary are measured).
+fn largest_n_index(ns: &[usize]) -> usize {
+    ns.iter()
+        .enumerate()
+        .max_by_key(|&(_, n)| n)
+        .map_or(0, |(i, _)| i)
+}
+
+/// The studies of one subject, in report order.
+fn studies_of<'a>(outcome: &'a Outcome, subject: &str) -> Vec<&'a Study> {
+    outcome
+        .studies
+        .iter()
+        .filter(|s| s.subject == subject)
+        .collect()
+}
+
+/// The classical study with the lowest MSE at point `at`.
+fn best_classical<'a>(studies: &[&'a Study], at: usize) -> Option<&'a Study> {
+    studies
+        .iter()
+        .filter(|s| s.family == "classical")
+        .min_by(|a, b| a.points[at].mse.total_cmp(&b.points[at].mse))
+        .copied()
+}
+
+/// Groups of samplers whose estimates are the same bit for bit at every N (the integrand only sees
+/// coordinates these samplers share): each group of two or more, labels in report order.
+fn identical_groups(studies: &[&Study]) -> Vec<Vec<String>> {
+    // A study's fingerprint: every point's N, MSE and standard error, as bits.
+    type Fingerprint = Vec<(usize, u64, u64)>;
+    let fingerprint = |s: &Study| -> Fingerprint {
+        s.points
+            .iter()
+            .map(|p| (p.n, p.mse.to_bits(), p.mse_stderr.to_bits()))
+            .collect()
+    };
+    let mut groups: Vec<(Fingerprint, Vec<String>)> = Vec::new();
+    for s in studies {
+        let f = fingerprint(s);
+        match groups.iter_mut().find(|(g, _)| *g == f) {
+            Some((_, labels)) => labels.push(s.sampler.clone()),
+            None => groups.push((f, vec![s.sampler.clone()])),
+        }
+    }
+    groups
+        .into_iter()
+        .map(|(_, labels)| labels)
+        .filter(|l| l.len() > 1)
+        .collect()
+}
+
+/// A shear to 3 decimals, with no minus sign on a value that rounds to zero.
+fn shear_text(s: f64) -> String {
+    let t = format!("{s:.3}");
+    if t == "-0.000" {
+        "0.000".into()
+    } else {
+        t
+    }
 }
 
 fn write_markdown(
@@ -286,6 +373,7 @@ fn write_markdown(
              cannot make an N uses its nearest valid N (shown). Seed {}; whole run {:.1} s.\n",
             c.seed, outcome.seconds
         )?;
+        write_summary(w, outcome)?;
         writeln!(w, "## Integrands\n")?;
         writeln!(
             w,
@@ -301,105 +389,21 @@ fn write_markdown(
         {
             writeln!(
                 w,
-                "| {label} | {class} | ({:.3}, {:.3}) | [{:.3}, {:.3}] |",
-                shear.0, shear.1, range.0, range.1
+                "| {label} | {class} | ({}, {}) | [{}, {}] |",
+                shear_text(shear.0),
+                shear_text(shear.1),
+                shear_text(range.0),
+                shear_text(range.1)
             )?;
         }
         for (SubjectInfo { label, .. }, (conv, speed)) in outcome.subjects.iter().zip(plots) {
-            let studies: Vec<&Study> = outcome
-                .studies
-                .iter()
-                .filter(|s| &s.subject == label)
-                .collect();
-            writeln!(w, "\n## {label}\n")?;
-            write!(w, "| sampler | family |")?;
-            for n in &c.ns {
-                write!(w, " MSE at N={n} |")?;
-            }
-            let nmax = c.ns.last().copied().unwrap_or(0);
-            writeln!(w, " slope [95% CI] | ms/estimate at N={nmax} | set-up s at N={nmax} | gain over best classical at N={nmax} |")?;
-            writeln!(w, "|---|---|{}---|---|---|---|", "---|".repeat(c.ns.len()))?;
-            let best_classical = studies
-                .iter()
-                .filter(|s| s.family == "classical")
-                .filter_map(|s| s.points.last().map(|p| p.mse))
-                .fold(f64::INFINITY, f64::min);
-            for s in &studies {
-                write!(w, "| {} | {} |", s.sampler, s.family)?;
-                for (p, n) in s.points.iter().zip(&c.ns) {
-                    let shown = if p.n == *n {
-                        String::new()
-                    } else {
-                        format!(" (N={})", p.n)
-                    };
-                    write!(w, " {:.3e} ± {:.1e}{shown} |", p.mse, p.mse_stderr)?;
-                }
-                let last = s.points.last().expect("one point per N");
-                writeln!(
-                    w,
-                    " {} | {:.3} | {:.2} | {:.2}× |",
-                    slope_text(s),
-                    last.seconds / r as f64 * 1e3,
-                    s.setup_seconds.last().expect("one set-up time per N"),
-                    best_classical / last.mse
-                )?;
-            }
+            write_subject(w, outcome, label)?;
             writeln!(
                 w,
                 "\n![convergence]({conv})\n![speed against error]({speed})"
             )?;
         }
-        writeln!(w, "\n## Robustness to oracle error\n")?;
-        writeln!(
-            w,
-            "MSE at N = {} when the oracle's shear is scaled by (1 + error); in brackets, the gain over the best classical \
-             sampler on that integrand at the same N (best classical MSE / this MSE; above 1 is a gain). Tables keep \
-             the shape built for the true shear range; a table for a range that holds an in-focus layer is designed \
-             in that layer's frame and not sheared, so the error does not move it.\n",
-            c.ns.iter().max().unwrap_or(&0)
-        )?;
-        let mut errors = vec![0.0];
-        errors.extend(c.oracle_errors.iter().copied());
-        write!(w, "| integrand | sampler |")?;
-        for e in &errors {
-            write!(w, " error {:+.0}% |", e * 100.0)?;
-        }
-        writeln!(w, "\n|---|---|{}", "---|".repeat(errors.len()))?;
-        let mut keys: Vec<(&String, &String)> = outcome
-            .robustness
-            .iter()
-            .map(|r| (&r.subject, &r.sampler))
-            .collect();
-        keys.dedup();
-        // The robustness rows are at the largest N, wherever it is in `ns`.
-        let at_largest =
-            c.ns.iter()
-                .enumerate()
-                .max_by_key(|&(_, n)| n)
-                .map_or(0, |(i, _)| i);
-        for (subject, sampler) in keys {
-            let best_classical = outcome
-                .studies
-                .iter()
-                .filter(|s| &s.subject == subject && s.family == "classical")
-                .filter_map(|s| s.points.get(at_largest).map(|p| p.mse))
-                .fold(f64::INFINITY, f64::min);
-            let rows: Vec<_> = outcome
-                .robustness
-                .iter()
-                .filter(|r| &r.subject == subject && &r.sampler == sampler)
-                .collect();
-            write!(w, "| {subject} | {sampler} |")?;
-            for row in &rows {
-                write!(
-                    w,
-                    " {:.2e} ({:.2}×) |",
-                    row.point.mse,
-                    best_classical / row.point.mse
-                )?;
-            }
-            writeln!(w)?;
-        }
+        write_robustness(w, outcome)?;
         writeln!(w, "\n## Spectra\n")?;
         writeln!(
             w,
@@ -418,4 +422,198 @@ fn write_markdown(
              `spectra/*.npy` are [projection (xy, uv, xu, yv), K, K]."
         )
     })
+}
+
+/// The answer first: per integrand, at the largest N, the best classical sampler and the sampler with
+/// the lowest MSE, its gain, its cost, and its worst gain when the oracle's shear is off.
+fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
+    let c = &outcome.config;
+    let at = largest_n_index(&c.ns);
+    let nmax = c.ns.get(at).copied().unwrap_or(0);
+    let r = c.realizations as f64;
+    let errors = c
+        .oracle_errors
+        .iter()
+        .map(|e| format!("{:+.0}%", e * 100.0))
+        .collect::<Vec<_>>()
+        .join(", ");
+    writeln!(w, "## Summary\n")?;
+    writeln!(
+        w,
+        "At N = {nmax}: the classical sampler with the lowest MSE, and the sampler with the lowest MSE of all \
+         (samplers that tie bit for bit are named together, the one most robust to oracle error first), its gain over that classical sampler (its MSE \
+         divided by this one's), its time per estimate and its one-off set-up, and its lowest gain when the \
+         oracle's shear is off by {errors} (for the first named; — when it does not use the oracle).\n"
+    )?;
+    writeln!(
+        w,
+        "| integrand | class | best classical (MSE) | best sampler | gain | ms/estimate | set-up s | lowest gain with the oracle off |"
+    )?;
+    writeln!(w, "|---|---|---|---|---|---|---|---|")?;
+    for subject in &outcome.subjects {
+        let studies = studies_of(outcome, &subject.label);
+        let (Some(classical), Some(best)) = (
+            best_classical(&studies, at),
+            studies
+                .iter()
+                .min_by(|a, b| a.points[at].mse.total_cmp(&b.points[at].mse)),
+        ) else {
+            continue;
+        };
+        let reference = classical.points[at].mse;
+        let lowest_gain = |sampler: &str| {
+            outcome
+                .robustness
+                .iter()
+                .filter(|row| {
+                    row.subject == subject.label && row.sampler == sampler && row.error != 0.0
+                })
+                .map(|row| reference / row.point.mse)
+                .min_by(f64::total_cmp)
+        };
+        // Samplers that tie with the exact oracle may part when it is off: the most robust first.
+        let mut tied: Vec<(String, Option<f64>)> = identical_groups(&studies)
+            .into_iter()
+            .find(|g| g.contains(&best.sampler))
+            .unwrap_or_else(|| vec![best.sampler.clone()])
+            .into_iter()
+            .map(|label| {
+                let g = lowest_gain(&label);
+                (label, g)
+            })
+            .collect();
+        tied.sort_by(|a, b| {
+            b.1.unwrap_or(f64::NEG_INFINITY)
+                .total_cmp(&a.1.unwrap_or(f64::NEG_INFINITY))
+        });
+        let names: Vec<&str> = tied.iter().map(|t| t.0.as_str()).collect();
+        let lowest = tied[0].1.map_or("—".to_string(), |g| format!("{g:.2}×"));
+        let first = studies
+            .iter()
+            .find(|s| s.sampler == tied[0].0)
+            .expect("a tied sampler is a study of this subject");
+        let p = &first.points[at];
+        writeln!(
+            w,
+            "| {} | {} | {} ({:.3e}) | {} | {:.2}× | {:.3} | {:.2} | {lowest} |",
+            subject.label,
+            subject.class,
+            classical.sampler,
+            reference,
+            names.join(" = "),
+            reference / p.mse,
+            p.seconds / r * 1e3,
+            first.setup_seconds[at],
+        )?;
+    }
+    writeln!(w)
+}
+
+/// One integrand's table: MSE at every N, slope, time, set-up and gain, then which classical sampler
+/// the gains are against and which rows are identical.
+fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io::Result<()> {
+    let c = &outcome.config;
+    let r = c.realizations as f64;
+    let studies = studies_of(outcome, label);
+    writeln!(w, "\n## {label}\n")?;
+    write!(w, "| sampler | family |")?;
+    for n in &c.ns {
+        write!(w, " MSE at N={n} |")?;
+    }
+    let nmax = c.ns.last().copied().unwrap_or(0);
+    let last = c.ns.len().saturating_sub(1);
+    writeln!(w, " slope [95% CI] | ms/estimate at N={nmax} | set-up s at N={nmax} | gain over best classical at N={nmax} |")?;
+    writeln!(w, "|---|---|{}---|---|---|---|", "---|".repeat(c.ns.len()))?;
+    let classical = best_classical(&studies, last);
+    let reference = classical.map_or(f64::INFINITY, |s| s.points[last].mse);
+    for s in &studies {
+        write!(w, "| {} | {} |", s.sampler, s.family)?;
+        for (p, n) in s.points.iter().zip(&c.ns) {
+            let shown = if p.n == *n {
+                String::new()
+            } else {
+                format!(" (N={})", p.n)
+            };
+            write!(w, " {:.3e} ± {:.1e}{shown} |", p.mse, p.mse_stderr)?;
+        }
+        let p = s.points.last().expect("one point per N");
+        writeln!(
+            w,
+            " {} | {:.3} | {:.2} | {:.2}× |",
+            slope_text(s),
+            p.seconds / r * 1e3,
+            s.setup_seconds.last().expect("one set-up time per N"),
+            reference / p.mse
+        )?;
+    }
+    if let Some(classical) = classical {
+        writeln!(
+            w,
+            "\nGains are against {}, the classical sampler with the lowest MSE at N={nmax}.",
+            classical.sampler
+        )?;
+    }
+    for group in identical_groups(&studies) {
+        writeln!(
+            w,
+            "\nIdentical estimates, bit for bit at every N: {}. These samplers put the same points where this \
+             integrand looks (e.g. an oracle shear of 0 leaves a sampler as it is; with the exact shear, every \
+             table's x (and y) sit at the same stratum centres, and the edge sees nothing else).",
+            group.join(", ")
+        )?;
+    }
+    Ok(())
+}
+
+/// The robustness table: at the largest N, MSE ± its standard error and the gain over the best
+/// classical sampler, with the oracle's shear scaled by `1 + error`, errors in increasing order.
+fn write_robustness(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
+    let c = &outcome.config;
+    let at = largest_n_index(&c.ns);
+    writeln!(w, "\n## Robustness to oracle error\n")?;
+    writeln!(
+        w,
+        "MSE ± its standard error at N = {} when the oracle's shear is scaled by (1 + error); in brackets, the gain \
+         over the best classical sampler on that integrand at the same N (best classical MSE / this MSE; above 1 \
+         is a gain). Tables keep the shape built for the true shear range; a table for a range that holds an \
+         in-focus layer is designed in that layer's frame and not sheared, so the error does not move it.\n",
+        c.ns.get(at).unwrap_or(&0)
+    )?;
+    let mut errors: Vec<f64> = outcome.robustness.iter().map(|row| row.error).collect();
+    errors.sort_by(f64::total_cmp);
+    errors.dedup();
+    write!(w, "| integrand | sampler |")?;
+    for e in &errors {
+        write!(w, " error {:+.0}% |", e * 100.0)?;
+    }
+    writeln!(w, "\n|---|---|{}", "---|".repeat(errors.len()))?;
+    let mut keys: Vec<(&String, &String)> = outcome
+        .robustness
+        .iter()
+        .map(|r| (&r.subject, &r.sampler))
+        .collect();
+    keys.dedup();
+    for (subject, sampler) in keys {
+        let reference = best_classical(&studies_of(outcome, subject), at)
+            .map_or(f64::INFINITY, |s| s.points[at].mse);
+        write!(w, "| {subject} | {sampler} |")?;
+        for e in &errors {
+            match outcome
+                .robustness
+                .iter()
+                .find(|row| &row.subject == subject && &row.sampler == sampler && row.error == *e)
+            {
+                Some(row) => write!(
+                    w,
+                    " {:.2e} ± {:.1e} ({:.2}×) |",
+                    row.point.mse,
+                    row.point.mse_stderr,
+                    reference / row.point.mse
+                )?,
+                None => write!(w, " — |")?,
+            }
+        }
+        writeln!(w)?;
+    }
+    Ok(())
 }

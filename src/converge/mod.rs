@@ -245,7 +245,7 @@ pub fn csv_field(s: &str) -> String {
 /// The log-log plot of studies: MSE against N with ±1 standard error bars, one line per sampler,
 /// slopes (with 95% intervals) in the legend.
 pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Result<()> {
-    use crate::output::plot::{write_loglog_png, LogLogPlot, Series};
+    use crate::output::plot::{write_loglog_png, LegendCorner, LogLogPlot, Series};
     let series: Vec<Series> = studies
         .iter()
         .map(|s| Series {
@@ -259,6 +259,7 @@ pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Res
             points: s.points.iter().map(|p| (p.n as f64, p.mse)).collect(),
             errors: Some(s.points.iter().map(|p| p.mse_stderr).collect()),
             dashed: false,
+            colour: None,
         })
         .collect();
     write_loglog_png(
@@ -270,6 +271,7 @@ pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Res
             series,
             width: 1000,
             height: 700,
+            legend: LegendCorner::LowerLeft,
         },
     )
 }

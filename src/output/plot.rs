@@ -18,7 +18,36 @@ pub struct Series {
     pub errors: Option<Vec<f64>>,
     /// Draw dashed, without markers (for reference lines such as `N^-1`).
     pub dashed: bool,
+    /// Index into [`PALETTE`] (`None`: the series' own position in the plot), so that two series can
+    /// share a colour.
+    pub colour: Option<usize>,
 }
+
+/// Where the legend sits inside the axes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LegendCorner {
+    /// Bottom left (curves that fall from the top left, such as MSE against N).
+    LowerLeft,
+    /// Top right (curves that fall from the top left but spread to the right).
+    UpperRight,
+}
+
+/// Twelve colours that stay apart from one another (Tableau 10, then black and dark gold), used in
+/// order and then again.
+pub const PALETTE: [(u8, u8, u8); 12] = [
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+    (188, 189, 34),
+    (23, 190, 207),
+    (0, 0, 0),
+    (184, 134, 11),
+];
 
 /// A log-log plot.
 #[derive(Clone, Debug, PartialEq)]
@@ -35,6 +64,8 @@ pub struct LogLogPlot {
     pub width: u32,
     /// Image height, pixels.
     pub height: u32,
+    /// Where the legend goes.
+    pub legend: LegendCorner,
 }
 
 static FONT: Once = Once::new();
@@ -134,7 +165,8 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
             .draw()
             .map_err(|e| plot_error(path, e))?;
         for (i, s) in plot.series.iter().enumerate() {
-            let colour = Palette99::pick(i).to_rgba();
+            let (r, g, b) = PALETTE[s.colour.unwrap_or(i) % PALETTE.len()];
+            let colour = RGBColor(r, g, b).to_rgba();
             let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(keep).collect();
             let style = colour.stroke_width(2);
             if s.dashed {
@@ -172,7 +204,10 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
         }
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::LowerLeft)
+            .position(match plot.legend {
+                LegendCorner::LowerLeft => SeriesLabelPosition::LowerLeft,
+                LegendCorner::UpperRight => SeriesLabelPosition::UpperRight,
+            })
             .label_font(("sans-serif", 14))
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
@@ -201,16 +236,19 @@ mod tests {
                     points: vec![(16.0, 1e-2), (64.0, 2.5e-3), (256.0, 6e-4)],
                     errors: Some(vec![1e-3, 2e-4, 1e-4]),
                     dashed: false,
+                    colour: None,
                 },
                 Series {
                     label: "N^-2".into(),
                     points: vec![(16.0, 1e-3), (256.0, 4e-6)],
                     errors: None,
                     dashed: true,
+                    colour: None,
                 },
             ],
             width: 640,
             height: 480,
+            legend: LegendCorner::LowerLeft,
         };
         write_loglog_png(&path, &plot).unwrap();
         let decoder =

@@ -1,6 +1,7 @@
 //! The command line: a round trip through files, and bad input (exit code 2, a clear message, no output
 //! file, inputs untouched).
 
+use anisospec::compare::config::CompareConfig;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -264,4 +265,28 @@ fn compare_rejects_a_bad_config_before_any_work() {
     );
     std::fs::write(&config, "ns = [16]\n").unwrap();
     rejects(&["compare", "--config", c, "--out", o], "study.toml", &out);
+    // A whole config with one bad name, caught before any sampler runs.
+    type Mend = fn(&mut CompareConfig);
+    let cases: [(Mend, &str); 5] = [
+        (|c| c.sheared.push("padded-nosuch".into()), "padded-nosuch"),
+        (
+            |c| c.tables.push("targets/missing.toml".into()),
+            "missing.toml",
+        ),
+        (
+            |c| c.analytic[0].spec = "fan:s0=0.3,s1=0.7".into(),
+            "place a 2D one",
+        ),
+        (|c| c.ns = vec![16, 64, 16], "N = 16 twice"),
+        (
+            |c| c.analytic[1].label = c.analytic[0].label.clone(),
+            "labelled",
+        ),
+    ];
+    for (mend, needle) in cases {
+        let mut study = CompareConfig::default_suite();
+        mend(&mut study);
+        std::fs::write(&config, toml::to_string(&study).unwrap()).unwrap();
+        rejects(&["compare", "--config", c, "--out", o], needle, &out);
+    }
 }

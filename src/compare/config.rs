@@ -178,11 +178,48 @@ impl CompareConfig {
                 "oracle_errors are relative errors of the shear, finite and above -1 (e.g. -0.25, 0.1)".into(),
             ));
         }
-        for e in &self.analytic {
+        if let Some(n) = self
+            .ns
+            .iter()
+            .find(|&n| self.ns.iter().filter(|&m| m == n).count() > 1)
+        {
+            return Err(Error::Usage(format!(
+                "ns lists N = {n} twice; give each size once, e.g. ns = [16, 64, 256]"
+            )));
+        }
+        for name in self.classical.iter().chain(&self.sheared) {
+            crate::samplers::build(name, 4)?;
+        }
+        for path in &self.tables {
+            crate::targets::Target::load(path).map_err(|e| {
+                Error::Usage(format!(
+                    "table target {}: {e}; give the path of a target file such as targets/double-wedge.toml (paths are relative to the folder compare runs in)",
+                    path.display()
+                ))
+            })?;
+        }
+        for (i, e) in self.analytic.iter().enumerate() {
             if e.shear_range[0] > e.shear_range[1] {
                 return Err(Error::Usage(format!(
                     "{}: shear_range [{}, {}] has s_min > s_max",
                     e.label, e.shear_range[0], e.shear_range[1]
+                )));
+            }
+            let integrand = crate::integrands::parse(&e.spec)
+                .map_err(|err| Error::Usage(format!("{}: spec '{}': {err}", e.label, e.spec)))?;
+            if integrand.dims() != 4 {
+                return Err(Error::Usage(format!(
+                    "{}: spec '{}' is {}D; compare integrates 4D integrands, so place a 2D one on a plane, e.g. '{}@xu'",
+                    e.label,
+                    e.spec,
+                    integrand.dims(),
+                    e.spec
+                )));
+            }
+            if self.analytic[..i].iter().any(|o| o.label == e.label) {
+                return Err(Error::Usage(format!(
+                    "two analytic integrands are labelled '{}'; labels name the report's rows and plot files, so make them differ",
+                    e.label
                 )));
             }
         }

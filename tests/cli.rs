@@ -267,7 +267,7 @@ fn compare_rejects_a_bad_config_before_any_work() {
     rejects(&["compare", "--config", c, "--out", o], "study.toml", &out);
     // A whole config with one bad name, caught before any sampler runs.
     type Mend = fn(&mut CompareConfig);
-    let cases: [(Mend, &str); 5] = [
+    let cases: [(Mend, &str); 6] = [
         (|c| c.sheared.push("padded-nosuch".into()), "padded-nosuch"),
         (
             |c| c.tables.push("targets/missing.toml".into()),
@@ -282,6 +282,7 @@ fn compare_rejects_a_bad_config_before_any_work() {
             |c| c.analytic[1].label = c.analytic[0].label.clone(),
             "labelled",
         ),
+        (|c| c.analytic[0].label = "a | b".into(), "markdown"),
     ];
     for (mend, needle) in cases {
         let mut study = CompareConfig::default_suite();

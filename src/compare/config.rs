@@ -216,6 +216,12 @@ impl CompareConfig {
                     e.spec
                 )));
             }
+            if e.label.is_empty() || e.label.contains(['"', '|', '\n', '\r']) {
+                return Err(Error::Usage(format!(
+                    "analytic integrand label {:?}: a label must be non-empty and hold no '\"', '|' or line break (it goes into CSV and markdown tables)",
+                    e.label
+                )));
+            }
             if self.analytic[..i].iter().any(|o| o.label == e.label) {
                 return Err(Error::Usage(format!(
                     "two analytic integrands are labelled '{}'; labels name the report's rows and plot files, so make them differ",

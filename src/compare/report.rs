@@ -64,11 +64,11 @@ pub fn write(
 }
 
 fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result<()> {
-    let r = outcome.config.realizations as f64;
+    let r = outcome.config.realizations;
     write_atomic(&out.join("convergence.csv"), |w| {
         writeln!(
             w,
-            "subject,class,sampler,family,n,mse,mse_stderr,seconds_per_estimate,setup_seconds,slope,slope_ci_low,slope_ci_high"
+            "subject,class,sampler,family,n,realizations,mse,mse_stderr,seconds_per_estimate,setup_seconds,slope,slope_ci_low,slope_ci_high"
         )?;
         for s in &outcome.studies {
             let (slope, lo, hi) =
@@ -83,7 +83,7 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
             for (p, setup) in s.points.iter().zip(&s.setup_seconds) {
                 writeln!(
                     w,
-                    "\"{}\",{},\"{}\",{},{},{},{},{},{},{slope},{lo},{hi}",
+                    "\"{}\",{},\"{}\",{},{},{r},{},{},{},{},{slope},{lo},{hi}",
                     s.subject,
                     s.class,
                     s.sampler,
@@ -91,7 +91,7 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
                     p.n,
                     p.mse,
                     p.mse_stderr,
-                    p.seconds / r,
+                    p.median_seconds,
                     setup
                 )?;
             }
@@ -132,7 +132,7 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
     write_npy(
         &out.join("seconds_per_estimate.npy"),
         &shape,
-        &collect(&|p| p.seconds / r),
+        &collect(&|p| p.median_seconds),
     )
 }
 
@@ -175,7 +175,7 @@ fn write_speed_plot(
             s.points
                 .iter()
                 .zip(&s.setup_seconds)
-                .map(|(p, own)| ((p.seconds + setup * own) / r * 1e3, p.mse))
+                .map(|(p, own)| ((p.median_seconds + setup * own / r) * 1e3, p.mse))
                 .collect()
         };
         series.push(Series {
@@ -205,7 +205,7 @@ fn write_speed_plot(
                 config.realizations
             ),
             x_label: format!(
-                "ms per estimate: generation + evaluation (dashed: + table optimization / R, R = {})",
+                "ms per estimate, one thread: generation + evaluation (dashed: + table optimization / R, R = {})",
                 config.realizations
             ),
             y_label: "MSE (squared integrand units)".into(),
@@ -368,8 +368,8 @@ fn write_markdown(
              moved by a random toroidal shift. **MSE** is the mean squared error of one estimate against the exact integral \
              (analytic integrands) or the cached high-count reference (pixels), in squared integrand units, over R = {r} \
              realizations, ± its standard error. **Slope** is the fitted exponent of MSE ∝ N^slope with its 95% interval. \
-             **Time** is wall time per estimate (sample generation and integrand evaluation, 2 cores shared by the \
-             realizations), in milliseconds; **set-up** is the one-off optimization of the table for that N, in seconds. A sampler that \
+             **Time** is the median time of one estimate on one thread (generating its set, then evaluating the \
+             integrand), in milliseconds; **set-up** is the one-off optimization of the table for that N, in seconds. A sampler that \
              cannot make an N uses its nearest valid N (shown). Seed {}; whole run {:.1} s.\n",
             c.seed, outcome.seconds
         )?;
@@ -430,7 +430,6 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
     let c = &outcome.config;
     let at = largest_n_index(&c.ns);
     let nmax = c.ns.get(at).copied().unwrap_or(0);
-    let r = c.realizations as f64;
     let errors = c
         .oracle_errors
         .iter()
@@ -502,7 +501,7 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
             reference,
             names.join(" = "),
             reference / p.mse,
-            p.seconds / r * 1e3,
+            p.median_seconds * 1e3,
             first.setup_seconds[at],
         )?;
     }
@@ -513,7 +512,6 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
 /// the gains are against and which rows are identical.
 fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io::Result<()> {
     let c = &outcome.config;
-    let r = c.realizations as f64;
     let studies = studies_of(outcome, label);
     writeln!(w, "\n## {label}\n")?;
     write!(w, "| sampler | family |")?;
@@ -541,7 +539,7 @@ fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io:
             w,
             " {} | {:.3} | {:.2} | {:.2}× |",
             slope_text(s),
-            p.seconds / r * 1e3,
+            p.median_seconds * 1e3,
             s.setup_seconds.last().expect("one set-up time per N"),
             reference / p.mse
         )?;

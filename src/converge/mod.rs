@@ -42,8 +42,13 @@ pub struct ConvergePoint {
     pub mse_stderr: f64,
     /// Mean signed error `mean_r (I_N,r − I)`: near 0 for an unbiased estimator.
     pub mean_error: f64,
-    /// Wall time of this `N` (sampling and integration of all realizations), seconds.
+    /// Wall time of this `N` (sampling and integration of all realizations, on the rayon pool),
+    /// seconds.
     pub seconds: f64,
+    /// Median time of one estimate (generating, shifting and shearing its set, then evaluating the
+    /// integrand), on one thread, seconds: the cost per pixel a renderer sees, steadier than
+    /// `seconds / R` on a short batch.
+    pub median_seconds: f64,
     /// Integrand evaluations made: `N · R`.
     pub evaluations: u64,
 }
@@ -126,11 +131,17 @@ pub fn measure(
 ) -> Result<ConvergePoint> {
     check_plan(sampler, f, &[n], cfg.realizations)?;
     let start = Instant::now();
-    let errors: Vec<f64> = (0..cfg.realizations)
+    let (errors, mut times): (Vec<f64>, Vec<f64>) = (0..cfg.realizations)
         .into_par_iter()
-        .map(|r| realization_error(sampler, f, n, r, cfg))
-        .collect();
+        .map(|r| {
+            let one = Instant::now();
+            let error = realization_error(sampler, f, n, r, cfg);
+            (error, one.elapsed().as_secs_f64())
+        })
+        .unzip();
     let seconds = start.elapsed().as_secs_f64();
+    times.sort_by(f64::total_cmp);
+    let median_seconds = times[times.len() / 2];
     let rr = errors.len() as f64;
     let mse = errors.iter().map(|e| e * e).sum::<f64>() / rr;
     let var_sq = errors.iter().map(|e| (e * e - mse).powi(2)).sum::<f64>() / (rr - 1.0);
@@ -140,6 +151,7 @@ pub fn measure(
         mse_stderr: (var_sq / rr).sqrt(),
         mean_error: errors.iter().sum::<f64>() / rr,
         seconds,
+        median_seconds,
         evaluations: (n * cfg.realizations) as u64,
     };
     if !point.mse.is_finite() {

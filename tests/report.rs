@@ -474,6 +474,23 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
         assert_eq!(row[4], format!("{:.2}×", classical / best[at_max].mse));
     }
 
+    // The tables: per integrand, the table's target, and its set-up at every N as in the CSV.
+    let tables = &section("Tables").rows;
+    assert_eq!(tables.len(), 1 + subjects.len(), "{tables:?}");
+    for (row, (subject, _)) in tables[1..].iter().zip(&subjects) {
+        let study = studies
+            .iter()
+            .find(|s| &s[0].subject == subject && s[0].sampler == SAMPLERS[2].0)
+            .unwrap();
+        assert_eq!(row[0], *subject);
+        assert!(row[1].ends_with("hairline.toml"), "{row:?}");
+        let setups: Vec<String> = study
+            .iter()
+            .map(|p| format!("{:.2}", p.setup_seconds))
+            .collect();
+        assert_eq!(row[4..], setups[..], "{subject}");
+    }
+
     // The spectra gallery: one sheet per sampler, beside it the npy [projection, K, K] of expected
     // power spectra, P(0) = N in every projection.
     let gallery = &section("Spectra").links;

@@ -2,7 +2,7 @@
 //! spectra gallery per sampler, and CSV / npy of every number.
 
 use super::config::CompareConfig;
-use super::tables::TableCache;
+use super::tables::{frame_shear, table_frame, TableCache, TABLE_ITERATIONS};
 use super::{instantiate, usable_n, Outcome, SamplerSpec, Study, SubjectInfo};
 use crate::converge::{plot, Convergence};
 use crate::error::Result;
@@ -12,6 +12,7 @@ use crate::output::{write_atomic, write_npy};
 use crate::points::Projection;
 use crate::spectrum::expected::of_sampler;
 use crate::spectrum::Method;
+use crate::targets::Target;
 use std::io::Write;
 use std::path::Path;
 
@@ -60,7 +61,7 @@ pub fn write(
         plots.push((conv, speed));
     }
     let gallery = write_gallery(outcome, specs, tables, out)?;
-    write_markdown(outcome, &plots, &gallery, out)
+    write_markdown(outcome, specs, &plots, &gallery, out)
 }
 
 fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result<()> {
@@ -354,6 +355,7 @@ fn shear_text(s: f64) -> String {
 
 fn write_markdown(
     outcome: &Outcome,
+    specs: &[SamplerSpec],
     plots: &[(String, String)],
     gallery: &[(String, String)],
     out: &Path,
@@ -404,6 +406,7 @@ fn write_markdown(
             )?;
         }
         write_robustness(w, outcome)?;
+        write_tables(w, outcome, specs)?;
         writeln!(w, "\n## Spectra\n")?;
         writeln!(
             w,
@@ -612,6 +615,82 @@ fn write_robustness(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()
             }
         }
         writeln!(w)?;
+    }
+    Ok(())
+}
+
+/// The optimized tables behind each integrand's rows: the target in the frame the table was designed
+/// in, how it is moved at use, and its optimization time at every N.
+fn write_tables(
+    w: &mut impl Write,
+    outcome: &Outcome,
+    specs: &[SamplerSpec],
+) -> std::io::Result<()> {
+    let c = &outcome.config;
+    let targets: Vec<&Path> = specs
+        .iter()
+        .filter_map(|s| match s {
+            SamplerSpec::Table(p) => Some(p.as_path()),
+            _ => None,
+        })
+        .collect();
+    if targets.is_empty() {
+        return Ok(());
+    }
+    writeln!(w, "\n## Tables\n")?;
+    writeln!(
+        w,
+        "Each optimized sampler is a table of {} sets per N, built for one integrand's shear range from the \
+         target file ({TABLE_ITERATIONS} iterations, x and y held at the centres of the start's strata) and cached; \
+         each estimate uses one set with a random toroidal shift. A table for a range that holds 0 is designed \
+         in the frame of the in-focus layer and not moved; any other is designed around the range's centre \
+         and moved by the oracle's shear (seam-free). Set-up is the optimization time recorded when the table \
+         was built, also when it is read back from the cache.\n",
+        c.table_sets
+    )?;
+    write!(w, "| integrand | table | designed for | moved by |")?;
+    for n in &c.ns {
+        write!(w, " set-up s at N={n} |")?;
+    }
+    writeln!(w, "\n|---|---|---|---|{}", "---|".repeat(c.ns.len()))?;
+    for subject in &outcome.subjects {
+        for &target in &targets {
+            let label = SamplerSpec::Table(target.to_path_buf()).label();
+            let Some(study) = outcome
+                .studies
+                .iter()
+                .find(|s| s.subject == subject.label && s.sampler == label)
+            else {
+                continue;
+            };
+            let range = subject.shear_range;
+            let design = match Target::load(target).map(|t| table_frame(t, range)) {
+                Ok(Target::DoubleWedge(d)) => {
+                    format!("double wedge, slopes {:.2} to {:.2}", d.s0, d.s1)
+                }
+                Ok(t) => format!("{}, unsheared", t.kind()),
+                Err(e) => format!("({e})"),
+            };
+            let moved = if frame_shear(range) == 0.0 {
+                "not moved".to_string()
+            } else {
+                format!(
+                    "({}, {})",
+                    shear_text(subject.shear.0),
+                    shear_text(subject.shear.1)
+                )
+            };
+            write!(
+                w,
+                "| {} | {} | {design} | {moved} |",
+                subject.label,
+                target.display()
+            )?;
+            for t in &study.setup_seconds {
+                write!(w, " {t:.2} |")?;
+            }
+            writeln!(w)?;
+        }
     }
     Ok(())
 }

@@ -668,7 +668,8 @@ fn write_tables(
                 Ok(Target::DoubleWedge(d)) => {
                     format!("double wedge, slopes {:.2} to {:.2}", d.s0, d.s1)
                 }
-                Ok(t) => format!("{}, unsheared", t.kind()),
+                Ok(Target::Hairline(_)) => "hairline band, unsheared".to_string(),
+                Ok(t) => t.kind().to_string(),
                 Err(e) => format!("({e})"),
             };
             let moved = if frame_shear(range) == 0.0 {

@@ -28,7 +28,7 @@ pub struct Series {
 pub enum LegendCorner {
     /// Bottom left (curves that fall from the top left, such as MSE against N).
     LowerLeft,
-    /// Top right (curves that fall from the top left but spread to the right).
+    /// Top right (where MSE against time leaves room: fast samplers sit left, good ones low).
     UpperRight,
 }
 

@@ -62,24 +62,41 @@ impl Occupancy {
         !self.cells[a as usize][self.index(a, x, y)]
     }
 
+    /// The strata (multiples of `2^-m`) below `base`, whose top `high` bits are fixed, at which every
+    /// prefix of length `high + 1 ..= m` passes `free(length, prefix)`, in increasing order. A shape
+    /// looks at a prefix of the coordinate only, so a depth-first walk over the free bits, pruned at
+    /// the first taken interval, finds them in about (valid strata × `low`) checks instead of `2^low`
+    /// candidates × `low` shapes (Pharr 2019).
+    fn valid_strata(&self, high: u32, base: u64, free: impl Fn(u32, u64) -> bool) -> Vec<u64> {
+        let mut found = Vec::new();
+        let mut stack = vec![(high, base)];
+        while let Some((len, prefix)) = stack.pop() {
+            if len == self.m {
+                found.push(prefix);
+                continue;
+            }
+            // Bit 1 first onto the stack, so bit 0's subtree comes out first: increasing order.
+            for bit in [1u64, 0] {
+                let child = prefix | (bit << (BITS - len - 1));
+                if free(len + 1, child) {
+                    stack.push((len + 1, child));
+                }
+            }
+        }
+        found
+    }
+
     /// Places a point in sub-quadrant `(qx, qy)` of the `2^high` grid: random valid x and y strata of
     /// `2^m`, then uniform bits below.
     fn place(&mut self, high: u32, qx: u64, qy: u64, rng: &mut Rng) -> (u64, u64) {
         let m = self.m;
-        let low = m - high;
         let base_x = qx << (BITS - high);
         let base_y = qy << (BITS - high);
         let step = 1u64 << (BITS - m);
         // Shapes with more than `high` x bits have fewer than `low` y bits, all inside the fixed
         // sub-quadrant: they constrain the low x bits only (and symmetrically for y).
-        let valid_x: Vec<u64> = (0..1u64 << low)
-            .map(|l| base_x | (l * step))
-            .filter(|&x| (high + 1..=m).all(|a| self.free(a, x, base_y)))
-            .collect();
-        let valid_y: Vec<u64> = (0..1u64 << low)
-            .map(|l| base_y | (l * step))
-            .filter(|&y| (0..low).all(|a| self.free(a, base_x, y)))
-            .collect();
+        let valid_x = self.valid_strata(high, base_x, |a, x| self.free(a, x, base_y));
+        let valid_y = self.valid_strata(high, base_y, |len, y| self.free(m - len, base_x, y));
         assert!(
             !valid_x.is_empty() && !valid_y.is_empty(),
             "pmj02: no free stratum in a sub-quadrant (construction invariant broken)"
@@ -155,5 +172,56 @@ impl Sampler for Pmj02 {
             .into_iter()
             .flat_map(|(x, y)| [x as f64 * scale, y as f64 * scale])
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng;
+
+    /// The depth-first walk finds exactly the strata that checking every candidate against every
+    /// shape finds, in the same order, on occupancy tables of random points at every level and for
+    /// every split of the bits.
+    #[test]
+    fn walk_finds_every_valid_stratum() {
+        let mut rng = rng::substream(11, 0, 0);
+        for m in 1..=10u32 {
+            for trial in 0..20 {
+                let count = (trial * (1usize << m)) / 20;
+                let points: Vec<(u64, u64)> = (0..count)
+                    .map(|_| (rng.random::<u32>() as u64, rng.random::<u32>() as u64))
+                    .collect();
+                let occ = Occupancy::new(m, &points);
+                for high in 0..=m {
+                    let low = m - high;
+                    let step = 1u64 << (BITS - m);
+                    let q = rng.random_range(0..1u64 << high);
+                    let base = if high == 0 { 0 } else { q << (BITS - high) };
+                    let other = rng.random::<u32>() as u64;
+                    let every: Vec<u64> = (0..1u64 << low).map(|l| base | (l * step)).collect();
+                    let brute_x: Vec<u64> = every
+                        .iter()
+                        .copied()
+                        .filter(|&x| (high + 1..=m).all(|a| occ.free(a, x, other)))
+                        .collect();
+                    let brute_y: Vec<u64> = every
+                        .iter()
+                        .copied()
+                        .filter(|&y| (0..low).all(|a| occ.free(a, other, y)))
+                        .collect();
+                    assert_eq!(
+                        occ.valid_strata(high, base, |a, x| occ.free(a, x, other)),
+                        brute_x,
+                        "x, m = {m}, high = {high}, {count} points"
+                    );
+                    assert_eq!(
+                        occ.valid_strata(high, base, |len, y| occ.free(m - len, other, y)),
+                        brute_y,
+                        "y, m = {m}, high = {high}, {count} points"
+                    );
+                }
+            }
+        }
     }
 }

@@ -628,30 +628,3 @@ fn compare_writes_a_consistent_report_and_reuses_its_cache() {
     // Every sampler at 64 and padded jittered at 16, on both integrands.
     assert_eq!(shared, 2 * (SAMPLERS.len() + 1));
 }
-
-/// A config that passes validation but names an unknown sampler fails with exit code 2, names the
-/// sampler, and leaves no report folder behind.
-#[test]
-fn compare_with_an_unknown_sampler_writes_nothing() {
-    let dir = tempfile::tempdir().unwrap();
-    let config = dir.path().join("study.toml");
-    std::fs::write(
-        &config,
-        study(&[16, 64]).replace("\"padded-jittered\"", "\"padded-nosuch\""),
-    )
-    .unwrap();
-    let out = dir.path().join("report");
-    let o = anisospec(&[
-        "compare",
-        "--config",
-        config.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--cache",
-        dir.path().join("cache").to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("padded-nosuch"), "{err}");
-    assert!(!out.exists(), "a failed run left {}", out.display());
-}

@@ -56,6 +56,11 @@ fn main() -> ExitCode {
                     info.valid_n
                 );
             }
+            println!(
+                "table:PATH   2D,4D  optimized sets written by `anisospec optimize` (PATH.npy or .txt; \
+                 PATH may hold {{n}} for a family of tables at several N); each use takes one set at \
+                 random and shifts it  [N: the tables' own]"
+            );
             Ok(())
         }
         Command::Sample(a) => cli::sample::run(a),

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 /// Measure MSE(N) over independent, randomly shifted realizations, and fit the convergence slope.
 #[derive(Clone, Debug, clap::Args)]
 pub struct ConvergeArgs {
-    /// Samplers, comma-separated (see `anisospec samplers`), e.g. random,jittered,nrooks.
+    /// Samplers, comma-separated (see `anisospec samplers`), e.g. random,jittered,nrooks or table:PATH (optimized sets).
     #[arg(long, value_delimiter = ',', required = true)]
     pub sampler: Vec<String>,
     /// Integrand, NAME:key=value,... (see `anisospec integrands`), e.g. disc:r=0.3.
@@ -59,6 +59,18 @@ fn check_ext(path: &Option<PathBuf>, ext: &str, flag: &str) -> Result<()> {
 pub fn run(args: &ConvergeArgs) -> Result<()> {
     check_ext(&args.output, "csv", "-o")?;
     check_ext(&args.plot, "png", "--plot")?;
+    let inputs: Vec<PathBuf> = args
+        .sampler
+        .iter()
+        .flat_map(|name| crate::samplers::input_files(name.trim()))
+        .collect();
+    let outputs: Vec<&std::path::Path> = args
+        .output
+        .iter()
+        .chain(&args.plot)
+        .map(PathBuf::as_path)
+        .collect();
+    crate::output::check_outputs(&outputs, &inputs)?;
     let f = parse(&args.integrand)?;
     // Build and check every sampler before any work starts.
     let built = args

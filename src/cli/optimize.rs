@@ -5,9 +5,10 @@ use crate::error::{Error, Result};
 use crate::optimize::{
     self, loss::Repulsion, metrics, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
 };
-use crate::output::{ensure_not_input, write_atomic};
+use crate::output::{check_outputs, write_atomic};
 use crate::points::io::write_points;
 use crate::points::PointSets;
+use crate::samplers;
 use crate::spectrum::Method;
 use crate::targets::Target;
 use std::io::{IsTerminal, Write};
@@ -81,6 +82,12 @@ pub struct OptimizeArgs {
     pub repulsion_weight: f64,
 }
 
+/// The largest `--max-seconds` accepted (about 31 years): a limit, not a schedule.
+const MAX_SECONDS: f64 = 1e9;
+
+/// The largest weight accepted for a loss term.
+const MAX_WEIGHT: f64 = 1e6;
+
 fn check_args(args: &OptimizeArgs) -> Result<()> {
     if args.output.extension().and_then(|e| e.to_str()) != Some("npy") {
         return Err(Error::Usage(format!(
@@ -94,11 +101,23 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
             args.n
         )));
     }
-    if !(args.max_seconds.is_finite() && args.max_seconds > 0.0) {
+    if !(args.max_seconds.is_finite() && args.max_seconds > 0.0 && args.max_seconds <= MAX_SECONDS)
+    {
         return Err(Error::Usage(format!(
-            "--max-seconds {}: give a positive number of seconds",
+            "--max-seconds {:?}: give a positive number of seconds, at most {MAX_SECONDS:e}",
             args.max_seconds
         )));
+    }
+    for (flag, weight) in [
+        ("--strat-weight", args.strat_weight),
+        ("--annular-weight", args.annular_weight),
+        ("--repulsion-weight", args.repulsion_weight),
+    ] {
+        if !(weight.is_finite() && (0.0..=MAX_WEIGHT).contains(&weight)) {
+            return Err(Error::Usage(format!(
+                "{flag} {weight:?}: give a weight from 0 to {MAX_WEIGHT:e} (the loss's terms are of order 1; larger weights overflow the line search)"
+            )));
+        }
     }
     if !(args.tol.is_finite() && args.tol >= 0.0) {
         return Err(Error::Usage(format!(
@@ -131,9 +150,22 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         .iter()
         .map(|e| sibling(&args.output, e))
         .collect();
-    for o in &outputs {
-        ensure_not_input(o, Some(&args.target))?;
+    let mut inputs = vec![args.target.clone()];
+    if let Target::Image(img) = &target {
+        inputs.push(
+            args.target
+                .parent()
+                .unwrap_or(Path::new("."))
+                .join(&img.file),
+        );
     }
+    if let Some(init) = &args.init {
+        inputs.extend(samplers::input_files(init));
+    }
+    check_outputs(
+        &outputs.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
+        &inputs,
+    )?;
     let setup = Setup {
         target: target.clone(),
         n: args.n,

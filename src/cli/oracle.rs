@@ -34,6 +34,8 @@ pub fn run(args: &OracleArgs) -> Result<()> {
             args.output.display()
         )));
     }
+    let inputs: Vec<std::path::PathBuf> = args.scene.iter().cloned().collect();
+    crate::output::check_outputs(&[&npy, &exr], &inputs)?;
     crate::output::write_npy(&npy, &[h, w, ORACLE_CHANNELS.len()], &data)?;
     let channels: Vec<(&str, Vec<f32>)> = ORACLE_CHANNELS
         .iter()

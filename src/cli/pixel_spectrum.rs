@@ -52,16 +52,25 @@ fn parse_pixel(text: &str) -> Result<(usize, usize)> {
 /// Runs `anisospec pixel-spectrum`.
 pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
     let (px, py) = parse_pixel(&args.pixel)?;
+    let outputs = ["npy", "exr", "png"].map(|e| args.output.with_extension(e));
+    if outputs[0] == outputs[1] {
+        return Err(Error::Usage(format!(
+            "-o {} has no usable file name; give a path such as out/pixel.png",
+            args.output.display()
+        )));
+    }
+    let inputs: Vec<std::path::PathBuf> = args.scene.iter().cloned().collect();
+    crate::output::check_outputs(&outputs.each_ref().map(|p| p.as_path()), &inputs)?;
     let proj = Projection::parse(&args.proj, 4)?;
     let scene = Arc::new(Scene::load(args.scene.as_deref())?);
     let f = PixelIntegrand::new(scene, px, py)?;
     let p = slice_spectrum(|x| f.value(x), proj, args.res, args.average)?;
     let k = args.res;
-    crate::output::write_npy(&args.output.with_extension("npy"), &[k, k], &p)?;
-    crate::output::image::write_spectrum_exr(&args.output.with_extension("exr"), &p, k)?;
-    let png = args.output.with_extension("png");
+    let [npy, exr, png] = &outputs;
+    crate::output::write_npy(npy, &[k, k], &p)?;
+    crate::output::image::write_spectrum_exr(exr, &p, k)?;
     let (side, pixels) = spectrum_png_pixels(&p, k);
-    crate::output::image::write_png(&png, side, side, 1, &pixels)?;
+    crate::output::image::write_png(png, side, side, 1, &pixels)?;
     println!(
         "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {} (.npy, .exr)",
         proj.name(),

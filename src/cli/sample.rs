@@ -2,15 +2,16 @@
 
 use super::{parse_shear, parse_shear_mode, sampler_with_shear};
 use crate::error::Result;
+use crate::output::check_outputs;
 use crate::points::io::{write_points, Format};
 use crate::points::shear::ShearMode;
-use crate::samplers::generate_sets;
+use crate::samplers::{self, generate_sets};
 use std::path::PathBuf;
 
 /// Draw point sets from a sampler.
 #[derive(Debug, clap::Args)]
 pub struct SampleArgs {
-    /// Sampler name (see `anisospec samplers`), e.g. mj, sobol, padded-cmj, oa.
+    /// Sampler name (see `anisospec samplers`), e.g. mj, sobol, padded-cmj, oa, or table:PATH (optimized sets).
     #[arg(long)]
     pub sampler: String,
     /// Dimensions of each point: 2 (x,y) or 4 (x,y,u,v).
@@ -43,6 +44,7 @@ pub struct SampleArgs {
 /// Runs `anisospec sample`.
 pub fn run(args: &SampleArgs) -> Result<()> {
     Format::of(&args.output)?;
+    check_outputs(&[&args.output], &samplers::input_files(&args.sampler))?;
     let sampler = sampler_with_shear(&args.sampler, args.dims, args.shear, args.shear_mode)?;
     let sets = generate_sets(sampler.as_ref(), args.n, args.sets, args.seed)?;
     write_points(&args.output, &sets)?;

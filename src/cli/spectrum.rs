@@ -3,20 +3,21 @@
 use super::{image_kinds, parse_shear, parse_shear_mode, sampler_with_shear, ImageKind};
 use crate::error::{Error, Result};
 use crate::output::image::{write_spectrum_exr, write_spectrum_png};
-use crate::output::{ensure_not_input, write_npy};
+use crate::output::{check_outputs, write_npy};
 use crate::points::io::read_points;
 use crate::points::shear::ShearMode;
 use crate::points::Projection;
+use crate::samplers;
 use crate::spectrum::expected::{of_sampler, of_sets, ExpectedSpectrum};
 use crate::spectrum::profiles::{radial_profile, write_radial_csv};
 use crate::spectrum::{check_res, Method};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Expected power spectrum P(k) = |Σ_j exp(−2πi k·x_j)|² / N of a sampler or a point file.
 #[derive(Debug, clap::Args)]
 #[command(group = clap::ArgGroup::new("source").required(true).args(["sampler", "input"]))]
 pub struct SpectrumArgs {
-    /// Sampler to draw the realizations from (see `anisospec samplers`).
+    /// Sampler to draw the realizations from (see `anisospec samplers`), or table:PATH (optimized sets).
     #[arg(long)]
     pub sampler: Option<String>,
     /// Point file (.npy [sets, N, D] or .txt): each set is one realization.
@@ -35,8 +36,8 @@ pub struct SpectrumArgs {
     /// Frequency grid side K (even): k1, k2 run over −K/2 … K/2−1.
     #[arg(long, default_value_t = 128)]
     pub res: usize,
-    /// Realizations averaged (independent sets). With --input, at most the number of sets in the file
-    /// (default: all of them).
+    /// Realizations averaged (independent sets). With --sampler, default 32; with --input, at most the
+    /// number of sets in the file (default: all of them).
     #[arg(long)]
     pub realizations: Option<usize>,
     /// Use the exact O(N K²) DFT instead of the NUFFT.
@@ -81,14 +82,37 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
     } else {
         Method::nufft(args.eps)?
     };
-    for extra in [&args.radial, &args.stderr].into_iter().flatten() {
-        if extra.extension().is_none() {
-            return Err(Error::Usage(format!(
-                "{} has no extension; name it .csv (--radial) or .npy (--stderr)",
-                extra.display()
-            )));
+    for (extra, flag, ext) in [
+        (&args.radial, "--radial", "csv"),
+        (&args.stderr, "--stderr", "npy"),
+    ] {
+        if let Some(path) = extra {
+            if path.extension().and_then(|e| e.to_str()) != Some(ext) {
+                return Err(Error::Usage(format!(
+                    "{flag} {}: name it .{ext} ({flag} writes {})",
+                    path.display(),
+                    if ext == "csv" {
+                        "a CSV table"
+                    } else {
+                        "an npy array"
+                    }
+                )));
+            }
         }
     }
+    let inputs = match (&args.sampler, &args.input) {
+        (Some(name), _) => samplers::input_files(name),
+        (None, Some(path)) => vec![path.clone()],
+        (None, None) => Vec::new(),
+    };
+    let outputs: Vec<&Path> = args
+        .output
+        .iter()
+        .chain(&args.radial)
+        .chain(&args.stderr)
+        .map(PathBuf::as_path)
+        .collect();
+    check_outputs(&outputs, &inputs)?;
     let spec = match (&args.sampler, &args.input) {
         (Some(name), _) => {
             let sampler = sampler_with_shear(name, args.dims, args.shear, args.shear_mode)?;
@@ -105,9 +129,6 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
             }
             let sets = read_points(path)?;
             let proj = Projection::parse(&args.proj, sets.dims())?;
-            for out in args.output.iter().chain(&args.radial).chain(&args.stderr) {
-                ensure_not_input(out, Some(path))?;
-            }
             let sets = match args.realizations {
                 Some(r) if r > sets.sets() => {
                     return Err(Error::Usage(format!(

@@ -58,6 +58,9 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
             )));
         }
     }
+    if let Some(out) = &args.output {
+        crate::output::check_outputs(&[out], &samplers::input_files(&args.sampler))?;
+    }
     let f = parse(&args.integrand)?;
     let sampler = samplers::build(&args.sampler, f.dims())?;
     let method = if args.exact {

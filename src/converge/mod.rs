@@ -230,7 +230,7 @@ pub fn write_csv(path: &std::path::Path, studies: &[Convergence]) -> Result<()> 
                 writeln!(
                     w,
                     "{},{},{},{:e},{:e},{:e},{},{},{slope},{lo},{hi}",
-                    s.sampler,
+                    csv_field(&s.sampler),
                     csv_field(&s.integrand),
                     p.n,
                     p.mse,

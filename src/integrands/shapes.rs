@@ -6,6 +6,7 @@ use super::polygon;
 use super::quad;
 use super::{Integrand, Reference};
 use crate::error::{Error, Result};
+use crate::points::shear::MAX_SHEAR;
 use crate::points::wrap;
 use crate::rng::Rng;
 use rand::Rng as _;
@@ -18,6 +19,18 @@ fn finite(name: &str, key: &str, v: f64) -> Result<f64> {
     } else {
         Err(Error::Usage(format!(
             "{name}: {key}={v} is not a finite number"
+        )))
+    }
+}
+
+/// `v` if it is a shear of magnitude at most [`MAX_SHEAR`] (beyond it the edges' integrals lose
+/// their precision).
+fn shear(name: &str, key: &str, v: f64) -> Result<f64> {
+    if finite(name, key, v)?.abs() <= MAX_SHEAR {
+        Ok(v)
+    } else {
+        Err(Error::Usage(format!(
+            "{name}: {key}={v:?} is beyond the largest shear, {MAX_SHEAR:e}; give a shear of magnitude at most that"
         )))
     }
 }
@@ -267,7 +280,7 @@ impl HalfPlane {
 
     /// The sheared step `x1 + s x2 < c` (`None`: the edge through the centre, `c = (1 + s)/2`).
     pub fn sheared(s: f64, c: Option<f64>) -> Result<Self> {
-        finite("sheared", "s", s)?;
+        shear("sheared", "s", s)?;
         Self::build(EdgeKind::Sheared { s }, [1.0, s], c, "sheared")
     }
 
@@ -358,8 +371,8 @@ const FAN_RULE: usize = 16;
 impl Fan {
     /// Shears `s0 < s1`, offset `c` (`None`: the mean edge through the centre, `c = (1 + (s0+s1)/2)/2`).
     pub fn new(s0: f64, s1: f64, c: Option<f64>) -> Result<Self> {
-        finite("fan", "s0", s0)?;
-        finite("fan", "s1", s1)?;
+        shear("fan", "s0", s0)?;
+        shear("fan", "s1", s1)?;
         if s0 > s1 {
             return Err(Error::Usage(format!(
                 "fan: s0={s0} > s1={s1}; the shears run from s0 up to s1, so swap them (fan:s0={s1},s1={s0})"

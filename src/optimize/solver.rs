@@ -4,7 +4,9 @@
 
 use super::loss::{Evaluation, Objective};
 use argmin::core::observers::{Observe, ObserverMode};
-use argmin::core::{CostFunction, Error as ArgminError, Executor, Gradient, State, KV};
+use argmin::core::{
+    CostFunction, Error as ArgminError, Executor, Gradient, State, TerminationReason, KV,
+};
 use argmin::solver::gradientdescent::SteepestDescent;
 use argmin::solver::linesearch::condition::ArmijoCondition;
 use argmin::solver::linesearch::{BacktrackingLineSearch, MoreThuenteLineSearch};
@@ -167,6 +169,8 @@ struct Round {
     iters: u64,
     failed: Option<String>,
     reason: String,
+    /// The solver gave up (e.g. its line search failed) rather than met a convergence test.
+    solver_exit: bool,
 }
 
 fn run_round(
@@ -192,6 +196,10 @@ fn run_round(
                         reason: state
                             .get_termination_reason()
                             .map_or_else(|| "stopped".to_string(), |r| r.text().to_string()),
+                        solver_exit: matches!(
+                            state.get_termination_reason(),
+                            Some(TerminationReason::SolverExit(_))
+                        ),
                     }
                 }
                 Err(e) => Round {
@@ -199,6 +207,7 @@ fn run_round(
                     iters: 0,
                     failed: Some(e.to_string()),
                     reason: String::new(),
+                    solver_exit: false,
                 },
             }
         };
@@ -223,6 +232,7 @@ fn run_round(
                     iters: 0,
                     failed: Some(e.to_string()),
                     reason: String::new(),
+                    solver_exit: false,
                 }
             }
         };
@@ -290,7 +300,8 @@ pub fn minimize(
             } else {
                 budget
             },
-            Duration::from_secs_f64(limits.max_seconds - elapsed),
+            Duration::try_from_secs_f64((limits.max_seconds - elapsed).max(0.0))
+                .unwrap_or(Duration::MAX),
             recorder,
             use_fallback,
             limits.tol,
@@ -314,6 +325,12 @@ pub fn minimize(
             }
             (None, true) if gain < limits.tol => {
                 break format!("converged (steepest descent gained {gain:.1e} < tol)")
+            }
+            (None, false) if gain <= 0.0 && round.solver_exit => {
+                break format!(
+                    "stopped: an L-BFGS round made no progress and gave up ({})",
+                    round.reason
+                )
             }
             (None, false) if gain < limits.tol => {
                 break format!(

@@ -7,7 +7,7 @@ pub mod sheet;
 
 use crate::error::{Error, Result};
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Writes `path` atomically: `fill` writes into a temporary file in the same folder, which is renamed
 /// onto `path` only if `fill` succeeds. The file gets the permissions `File::create` would give it.
@@ -70,21 +70,53 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> 
     })
 }
 
-/// Fails with a usage error if `output` is the same file as `input` (outputs never clobber inputs).
-pub fn ensure_not_input(output: &Path, input: Option<&Path>) -> Result<()> {
-    if let Some(input) = input {
-        let same = match (output.canonicalize(), input.canonicalize()) {
-            (Ok(a), Ok(b)) => a == b,
-            _ => false,
-        };
-        if same {
+/// Checks, before any work, that a command's outputs can be written without harm: no output is one of
+/// the `inputs` (point files, tables, targets, scenes: outputs never clobber inputs), no two outputs
+/// are the same file, no output is a folder, and each output's folder exists or can be created (no
+/// file stands where a folder must go). A usage error names the clash and the fix.
+pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<()> {
+    for (i, out) in outputs.iter().enumerate() {
+        if let Some(input) = inputs.iter().find(|input| same_file(out, input)) {
             return Err(Error::Usage(format!(
-                "the output {} is the input file; choose another output name",
-                output.display()
+                "the output {} is the input file {}; choose another output name",
+                out.display(),
+                input.display()
+            )));
+        }
+        if let Some(other) = outputs[..i].iter().find(|o| same_file(out, o)) {
+            return Err(Error::Usage(format!(
+                "{} and {} name the same output file; give each output its own name",
+                other.display(),
+                out.display()
+            )));
+        }
+        if out.is_dir() {
+            return Err(Error::Usage(format!(
+                "the output {} is a folder; give a file name",
+                out.display()
+            )));
+        }
+        if let Some(blocker) = out.ancestors().skip(1).find(|a| a.exists() && !a.is_dir()) {
+            return Err(Error::Usage(format!(
+                "cannot write {}: {} is a file, not a folder; choose another output path",
+                out.display(),
+                blocker.display()
             )));
         }
     }
     Ok(())
+}
+
+/// Whether two paths name the same file: the same absolute path, or the same file once links are
+/// resolved (when both exist).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => matches!(
+            (std::path::absolute(a), std::path::absolute(b)),
+            (Ok(a), Ok(b)) if a == b
+        ),
+    }
 }
 
 #[cfg(all(test, unix))]

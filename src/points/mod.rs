@@ -184,8 +184,9 @@ impl Projection {
                 "any two of x,y,u,v"
             };
             return Err(Error::Usage(format!(
-                "--proj '{text}' needs {} dimensions but the points have {dims}; use {valid}",
-                a.max(b) + 1
+                "--proj '{text}' names dimension {} but the points have {dims} (0 to {}); use {valid}",
+                a.max(b),
+                dims - 1
             )));
         }
         Ok(Self { a, b })

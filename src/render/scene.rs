@@ -82,7 +82,8 @@ pub struct SceneConfig {
     pub fov: f64,
     /// Camera (lens centre) position in world units; the camera always looks down `+z`, `+y` up.
     pub position: [f64; 3],
-    /// Focal distance `F`: depth (world units along `z` from the lens) of the plane in focus.
+    /// Focal distance `F`: depth (world units along `z` from the lens) of the plane in focus, in
+    /// `(1e-3, 1e6)`.
     pub focus: f64,
     /// Side `A` of the square aperture, world units; 0 is a pinhole.
     pub aperture: f64,
@@ -144,7 +145,8 @@ impl SceneConfig {
             }
         }
         range("fov", self.fov, 0.0, 170.0)?;
-        range("focus", self.focus, 0.0, 1e6)?;
+        // Nearer than 1e-3 world units the oracle's shears (about aperture / focus) run past any useful range.
+        range("focus", self.focus, 1e-3, 1e6)?;
         if !(self.aperture.is_finite() && (0.0..1.0).contains(&self.aperture)) {
             return Err(format!(
                 "aperture = {} is out of range; it must lie in [0, 1) world units (0 is a pinhole)",

@@ -2,7 +2,7 @@
 
 use super::Sampler;
 use crate::error::{Error, Result};
-use crate::points::shear::{shear_set_4d, ShearMode};
+use crate::points::shear::{shear_set_4d, ShearMode, MAX_SHEAR};
 use crate::rng::Rng;
 
 /// Which pairs of 4D dimensions receive the two 2D sets.
@@ -93,7 +93,8 @@ pub struct Sheared {
 }
 
 impl Sheared {
-    /// Shears a 4D sampler; `Error::Usage` if `inner` is not 4D or a shear is not finite.
+    /// Shears a 4D sampler; `Error::Usage` if `inner` is not 4D or a shear is not finite or above
+    /// [`MAX_SHEAR`] in magnitude.
     pub fn new(inner: Box<dyn Sampler>, sx: f64, sy: f64, mode: ShearMode) -> Result<Self> {
         if inner.dims() != 4 {
             return Err(Error::Usage(format!(
@@ -103,9 +104,9 @@ impl Sheared {
                 inner.name()
             )));
         }
-        if !sx.is_finite() || !sy.is_finite() {
+        if !(sx.abs() <= MAX_SHEAR && sy.abs() <= MAX_SHEAR) {
             return Err(Error::Usage(format!(
-                "shear ({sx}, {sy}) is not finite; give finite shears for xu and yv"
+                "shear ({sx:?}, {sy:?}) is not a finite shear of magnitude at most {MAX_SHEAR:e}; give shears for xu and yv in that range (beyond it the sheared coordinates lose their precision)"
             )));
         }
         Ok(Self {

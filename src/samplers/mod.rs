@@ -49,7 +49,7 @@ pub trait Sampler: Send + Sync {
 pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
     if n == 0 {
         return Err(Error::Usage(format!(
-            "-n 0 asks for no points; {} needs at least one (try -n {})",
+            "N = 0 asks for no points; {} needs at least one (e.g. N = {})",
             sampler.name(),
             usable_n(sampler, 1)
         )));
@@ -205,6 +205,15 @@ fn names_in(dims: usize) -> Vec<String> {
     }
 }
 
+/// The files a sampler name reads (the tables of `table:PATH`), so that commands can refuse to write
+/// over them; empty for the built-in samplers and for a pattern that matches nothing (building the
+/// sampler reports that).
+pub fn input_files(name: &str) -> Vec<std::path::PathBuf> {
+    name.strip_prefix("table:")
+        .and_then(|pattern| table::files(pattern).ok())
+        .unwrap_or_default()
+}
+
 /// Builds the sampler `name` in `dims` (2 or 4) dimensions.
 ///
 /// 2D: the names of [`NAMES_2D`]. 4D: [`NAMES_4D`], and `padded-NAME` / `xuyv-NAME` for every 2D
@@ -225,7 +234,7 @@ pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
         }
         if names_in(4).iter().any(|n| n == name) {
             return Err(Error::Usage(format!(
-                "sampler '{name}' makes 4D sets; use --dims 4, or one of the 2D samplers: {}",
+                "sampler '{name}' makes 4D sets, but 2D sets are asked here; ask for 4D (--dims 4 in sample and spectrum, a 4D integrand in variance and converge) or use one of the 2D samplers: {}",
                 NAMES_2D.join(", ")
             )));
         }

@@ -12,7 +12,7 @@ use crate::points::io::read_points;
 use crate::points::{toroidal_shift, PointSets};
 use crate::rng::Rng;
 use rand::Rng as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Tabulated point sets, one table per `N`.
 #[derive(Debug, Clone)]
@@ -25,48 +25,16 @@ pub struct Table {
 impl Table {
     /// Loads the table(s) named by `pattern` for `dims`-dimensional use.
     pub fn load(pattern: &str, dims: usize) -> Result<Self> {
-        let files = match pattern.split_once("{n}") {
-            None => vec![pattern.into()],
-            Some((head, tail)) => {
-                let path = Path::new(head);
-                let (dir, prefix) = if head.ends_with('/') || head.is_empty() {
-                    (Path::new(if head.is_empty() { "." } else { head }), "")
-                } else {
-                    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
-                    let prefix = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
-                    (dir.unwrap_or(Path::new(".")), prefix)
-                };
-                let entries =
-                    std::fs::read_dir(dir).map_err(|e| Error::io("list the folder", dir, e))?;
-                let mut found: Vec<std::path::PathBuf> = entries
-                    .filter_map(|e| e.ok())
-                    .filter(|e| {
-                        e.file_name().to_str().is_some_and(|name| {
-                            name.strip_prefix(prefix)
-                                .and_then(|r| r.strip_suffix(tail))
-                                .is_some_and(|n| {
-                                    !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit())
-                                })
-                        })
-                    })
-                    .map(|e| e.path())
-                    .collect();
-                found.sort();
-                found
-            }
-        };
-        if files.is_empty() {
-            return Err(Error::Usage(format!(
-                "table:{pattern} matches no file; write tables with `anisospec optimize -o NAME.npy`, one per N, and name them with {{n}} in place of N"
-            )));
-        }
+        let files = files(pattern)?;
         let mut tables = Vec::new();
         for f in &files {
             let t = read_points(f)?;
             if t.dims() != dims {
                 return Err(Error::Usage(format!(
-                    "table {} holds {}D points but {dims}D were asked; use --dims {}",
+                    "table {} holds {}D points but {dims}D are asked here; use it for {}D sets (--dims {} in sample and spectrum, a {}D integrand in variance and converge)",
                     f.display(),
+                    t.dims(),
+                    t.dims(),
                     t.dims(),
                     t.dims()
                 )));
@@ -121,6 +89,45 @@ impl Sampler for Table {
         toroidal_shift(&mut set, &shift);
         set
     }
+}
+
+/// The files a `table:` pattern names: the path itself, or every file of its folder that matches a
+/// pattern holding `{n}` with a whole number in its place, sorted. None is a usage error.
+pub fn files(pattern: &str) -> Result<Vec<PathBuf>> {
+    let files = match pattern.split_once("{n}") {
+        None => vec![pattern.into()],
+        Some((head, tail)) => {
+            let path = Path::new(head);
+            let (dir, prefix) = if head.ends_with('/') || head.is_empty() {
+                (Path::new(if head.is_empty() { "." } else { head }), "")
+            } else {
+                let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+                let prefix = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
+                (dir.unwrap_or(Path::new(".")), prefix)
+            };
+            let entries =
+                std::fs::read_dir(dir).map_err(|e| Error::io("list the folder", dir, e))?;
+            let mut found: Vec<PathBuf> = entries
+                .filter_map(|e| e.ok())
+                .filter(|e| {
+                    e.file_name().to_str().is_some_and(|name| {
+                        name.strip_prefix(prefix)
+                            .and_then(|r| r.strip_suffix(tail))
+                            .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+                    })
+                })
+                .map(|e| e.path())
+                .collect();
+            found.sort();
+            found
+        }
+    };
+    if files.is_empty() {
+        return Err(Error::Usage(format!(
+            "table:{pattern} matches no file; write tables with `anisospec optimize -o NAME.npy`, one per N, and name them with {{n}} in place of N"
+        )));
+    }
+    Ok(files)
 }
 
 #[cfg(test)]

@@ -66,12 +66,22 @@ fn plan_or_panic(res: usize, eps: f64) -> Arc<Nufft2d> {
     })
 }
 
-/// Checks a spectrum resolution `K`: even and positive.
+/// The largest spectrum resolution `K`: a `K × K` grid of `f64` is then 512 MiB, and the transforms
+/// hold a few of them.
+pub const MAX_RES: usize = 8192;
+
+/// Checks a spectrum resolution `K`: even, positive and at most [`MAX_RES`].
 pub fn check_res(res: usize) -> Result<()> {
     if res == 0 || res % 2 == 1 {
         return Err(Error::Usage(format!(
             "--res {res} is not a positive even number; the frequency grid k = -K/2..K/2-1 needs K even, e.g. --res {}",
-            (res + 1).max(2) / 2 * 2
+            (res.min(MAX_RES) + 1).max(2) / 2 * 2
+        )));
+    }
+    if res > MAX_RES {
+        return Err(Error::Usage(format!(
+            "--res {res} is above the largest grid, {MAX_RES} (a {res} x {res} grid needs {:.1} GiB per array); lower --res",
+            (res as f64).powi(2) * 8.0 / (1u64 << 30) as f64
         )));
     }
     Ok(())

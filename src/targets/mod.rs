@@ -432,6 +432,13 @@ impl Target {
             return Err(self.beyond_reach(n, estimate));
         }
         let sqrt_n = (n as f64).sqrt();
+        let largest = (crate::spectrum::MAX_RES / 2 - 1) as f64;
+        if !(fit_radius.is_finite() && fit_radius <= largest) {
+            return Err(Error::Input(format!(
+                "the target reaches |k| = {fit_radius:.3e} frequency cells at N = {n}, beyond the largest grid ({} cells, |k| <= {largest}); shorten its length or radius (in units of sqrt(N)) or lower N",
+                crate::spectrum::MAX_RES
+            )));
+        }
         let res = 2 * (fit_radius.ceil() as usize) + 2;
         let half = (res / 2) as i64;
         let mut target = vec![1.0; res * res];

@@ -18,9 +18,10 @@ pub struct CompareArgs {
     /// Report folder: report.md, plots/, spectra/, CSV and npy.
     #[arg(long, default_value = "out/compare")]
     pub out: PathBuf,
-    /// Cache of pixel references and optimized tables (reused across runs).
-    #[arg(long, default_value = "out/cache")]
-    pub cache: PathBuf,
+    /// Cache of pixel references and optimized tables, reused across runs (default $ANISOSPEC_CACHE
+    /// or out/cache, as for render).
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
     /// Override the seed of the study.
     #[arg(long)]
     pub seed: Option<u64>,
@@ -36,7 +37,11 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     if let Some(seed) = args.seed {
         config.seed = seed;
     }
-    let outcome = compare::run(&config, &args.out, &args.cache)?;
+    let cache = args
+        .cache
+        .clone()
+        .unwrap_or_else(crate::render::pixel::default_cache_dir);
+    let outcome = compare::run(&config, &args.out, &cache)?;
     eprintln!(
         "compared {} samplers on {} integrands in {:.1} s; report in {}",
         outcome.studies.len() / outcome.subjects.len().max(1),

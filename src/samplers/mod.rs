@@ -211,6 +211,7 @@ fn names_in(dims: usize) -> Vec<String> {
 pub fn input_files(name: &str) -> Vec<std::path::PathBuf> {
     name.strip_prefix("table:")
         .and_then(|pattern| table::files(pattern).ok())
+        .map(|files| files.into_iter().map(|(path, _)| path).collect())
         .unwrap_or_default()
 }
 

@@ -25,10 +25,16 @@ pub struct Table {
 impl Table {
     /// Loads the table(s) named by `pattern` for `dims`-dimensional use.
     pub fn load(pattern: &str, dims: usize) -> Result<Self> {
-        let files = files(pattern)?;
         let mut tables = Vec::new();
-        for f in &files {
+        for (f, named_n) in &files(pattern)? {
             let t = read_points(f)?;
+            if let Some(named) = named_n.filter(|&named| named != t.n()) {
+                return Err(Error::Input(format!(
+                    "table {} is named for N = {named} but holds N = {}; rename it (table:{pattern} finds each N by its name)",
+                    f.display(),
+                    t.n()
+                )));
+            }
             if t.dims() != dims {
                 return Err(Error::Usage(format!(
                     "table {} holds {}D points but {dims}D are asked here; use it for {}D sets (--dims {} in sample and spectrum, a {}D integrand in variance and converge)",
@@ -91,11 +97,12 @@ impl Sampler for Table {
     }
 }
 
-/// The files a `table:` pattern names: the path itself, or every file of its folder that matches a
-/// pattern holding `{n}` with a whole number in its place, sorted. None is a usage error.
-pub fn files(pattern: &str) -> Result<Vec<PathBuf>> {
+/// The files a `table:` pattern names, each with the N its name gives: the path itself (no N), or
+/// every file of its folder that matches a pattern holding `{n}` with a whole number in its place,
+/// sorted. None is a usage error.
+pub fn files(pattern: &str) -> Result<Vec<(PathBuf, Option<usize>)>> {
     let files = match pattern.split_once("{n}") {
-        None => vec![pattern.into()],
+        None => vec![(pattern.into(), None)],
         Some((head, tail)) => {
             let path = Path::new(head);
             let (dir, prefix) = if head.ends_with('/') || head.is_empty() {
@@ -107,16 +114,19 @@ pub fn files(pattern: &str) -> Result<Vec<PathBuf>> {
             };
             let entries =
                 std::fs::read_dir(dir).map_err(|e| Error::io("list the folder", dir, e))?;
-            let mut found: Vec<PathBuf> = entries
+            let mut found: Vec<(PathBuf, Option<usize>)> = entries
                 .filter_map(|e| e.ok())
-                .filter(|e| {
-                    e.file_name().to_str().is_some_and(|name| {
-                        name.strip_prefix(prefix)
-                            .and_then(|r| r.strip_suffix(tail))
-                            .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
-                    })
+                .filter_map(|e| {
+                    let name = e.file_name();
+                    let n = name
+                        .to_str()?
+                        .strip_prefix(prefix)?
+                        .strip_suffix(tail)
+                        .filter(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))?
+                        .parse()
+                        .ok()?;
+                    Some((e.path(), Some(n)))
                 })
-                .map(|e| e.path())
                 .collect();
             found.sort();
             found
@@ -153,5 +163,11 @@ mod tests {
         assert!(set.iter().all(|c| (0.0..1.0).contains(c)));
         assert!(Table::load(&pattern, 4).is_err());
         assert!(Table::load(&format!("{}/none-{{n}}.npy", dir.path().display()), 2).is_err());
+        // A file whose name gives another N than it holds is refused, not used for the wrong N.
+        let data: Vec<f64> = (0..2 * 17).map(|i| (i as f64 * 0.137) % 1.0).collect();
+        let p = PointSets::new(1, 17, 2, data).unwrap();
+        write_points(&dir.path().join("t-18.npy"), &p).unwrap();
+        let e = Table::load(&pattern, 2).unwrap_err().to_string();
+        assert!(e.contains("named for N = 18 but holds N = 17"), "{e}");
     }
 }

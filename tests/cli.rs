@@ -154,6 +154,215 @@ fn bad_resolution_is_rejected() {
     );
 }
 
+/// Outputs are checked against every input and against each other before any work: a table used as a
+/// sampler or as the optimizer's start, two outputs with one name, a file where a folder must go.
+#[test]
+fn outputs_never_clobber_tables_or_each_other() {
+    let (dir, table) = tmp("p.npy");
+    let t = table.to_str().unwrap();
+    let o = anisospec(&["sample", "--sampler", "random", "-n", "16", "-o", t]);
+    assert!(o.status.success());
+    let before = std::fs::read(&table).unwrap();
+    let sampler = format!("table:{t}");
+    for args in [
+        vec!["sample", "--sampler", &sampler, "-n", "16", "-o", t],
+        vec![
+            "spectrum",
+            "--sampler",
+            &sampler,
+            "-n",
+            "16",
+            "--res",
+            "8",
+            "-o",
+            t,
+        ],
+        vec![
+            "optimize",
+            "--target",
+            "targets/blue-noise.toml",
+            "-n",
+            "16",
+            "--init",
+            &sampler,
+            "-o",
+            t,
+        ],
+    ] {
+        let o = anisospec(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("is the input file"), "{args:?}: {err}");
+        assert_eq!(
+            std::fs::read(&table).unwrap(),
+            before,
+            "{args:?} changed the table"
+        );
+    }
+    let twice = dir.path().join("a.npy");
+    let twice = twice.to_str().unwrap();
+    rejects(
+        &[
+            "spectrum", "--input", t, "--res", "8", "-o", twice, "--stderr", twice,
+        ],
+        "name the same output file",
+        Path::new(twice),
+    );
+    let first = dir.path().join("ok.npy");
+    let blocked = format!("{t}/x.png");
+    rejects(
+        &[
+            "spectrum",
+            "--input",
+            t,
+            "--res",
+            "8",
+            "-o",
+            &format!("{},{blocked}", first.display()),
+        ],
+        "is a file, not a folder",
+        &first,
+    );
+    assert_eq!(std::fs::read(&table).unwrap(), before);
+}
+
+/// Values so large they would exhaust memory, lose all precision or overflow a solver end in exit 2
+/// and a message naming the limit.
+#[test]
+fn extreme_values_are_refused() {
+    let (dir, out) = tmp("x.npy");
+    let o = out.to_str().unwrap();
+    let long = dir.path().join("long.toml");
+    std::fs::write(
+        &long,
+        "kind = \"hairline\"\nshear = 0.0\nhalf_width = 0.0\nlength = 1e300\ninner_radius = 0.0\n",
+    )
+    .unwrap();
+    let cases: [(Vec<&str>, &str); 6] = [
+        (
+            vec![
+                "spectrum",
+                "--sampler",
+                "random",
+                "-n",
+                "16",
+                "--res",
+                "1000000",
+                "-o",
+                o,
+            ],
+            "above the largest grid",
+        ),
+        (
+            vec![
+                "sample",
+                "--sampler",
+                "random",
+                "--dims",
+                "4",
+                "-n",
+                "16",
+                "--shear",
+                "1e17,1e17",
+                "-o",
+                o,
+            ],
+            "magnitude at most",
+        ),
+        (
+            vec![
+                "converge",
+                "--sampler",
+                "padded-mj",
+                "--integrand",
+                "fan:s0=-1e16,s1=1e16@xu",
+                "-n",
+                "16,64",
+            ],
+            "beyond the largest shear",
+        ),
+        (
+            vec![
+                "optimize",
+                "--target",
+                "targets/blue-noise.toml",
+                "-n",
+                "16",
+                "--max-seconds",
+                "1e20",
+                "-o",
+                o,
+            ],
+            "at most",
+        ),
+        (
+            vec![
+                "optimize",
+                "--target",
+                "targets/blue-noise.toml",
+                "-n",
+                "16",
+                "--repulsion-weight",
+                "1e300",
+                "-o",
+                o,
+            ],
+            "give a weight from 0",
+        ),
+        (
+            vec![
+                "optimize",
+                "--target",
+                long.to_str().unwrap(),
+                "-n",
+                "16",
+                "-o",
+                o,
+            ],
+            "beyond the largest grid",
+        ),
+    ];
+    for (args, needle) in &cases {
+        rejects(args, needle, &out);
+    }
+}
+
+/// converge's CSV quotes sampler names, which hold commas once sheared: every row has the header's
+/// eleven fields.
+#[test]
+fn converge_csv_quotes_sheared_sampler_names() {
+    let (_dir, csv) = tmp("c.csv");
+    let o = anisospec(&[
+        "converge",
+        "--sampler",
+        "padded-mj",
+        "--integrand",
+        "sheared:s=0.5@xu",
+        "-n",
+        "16,64",
+        "--realizations",
+        "8",
+        "--shear",
+        "0.5,0.5",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    for line in text.lines().skip(1) {
+        let mut fields = 0;
+        let mut quoted = false;
+        for c in line.chars() {
+            match c {
+                '"' => quoted = !quoted,
+                ',' if !quoted => fields += 1,
+                _ => {}
+            }
+        }
+        assert_eq!(fields + 1, 11, "{line}");
+    }
+}
+
 #[test]
 fn projection_must_fit_dimensions() {
     let (_d, out) = tmp("x.npy");

@@ -225,6 +225,71 @@ fn bad_point_files_are_rejected_and_left_untouched() {
 }
 
 #[test]
+fn missing_input_files_are_input_errors() {
+    let (dir, out) = tmp("out.npy");
+    let o = out.to_str().unwrap();
+    let missing = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let (points, table, folder) = (
+        missing("nonexist.npy"),
+        missing("missing.npy"),
+        missing("nodir"),
+    );
+    rejects(
+        &["spectrum", "--input", &points, "-o", o],
+        "nonexist.npy",
+        &out,
+    );
+    for sampler in [
+        format!("table:{table}"),
+        format!("table:{folder}/t{{n}}.npy"),
+    ] {
+        rejects(
+            &["spectrum", "--sampler", &sampler, "-n", "16", "-o", o],
+            "check the path",
+            &out,
+        );
+    }
+    let target = missing("missing.toml");
+    rejects(
+        &["optimize", "--target", &target, "-n", "16", "-o", o],
+        "missing.toml",
+        &out,
+    );
+    // A target whose image is missing.
+    let image_target = dir.path().join("image.toml");
+    std::fs::write(
+        &image_target,
+        "kind = \"image\"\nfile = \"no-image.npy\"\nextent = 1.0\n",
+    )
+    .unwrap();
+    rejects(
+        &[
+            "optimize",
+            "--target",
+            image_target.to_str().unwrap(),
+            "-n",
+            "16",
+            "-o",
+            o,
+        ],
+        "no-image.npy",
+        &out,
+    );
+    let report = dir.path().join("report");
+    rejects(
+        &[
+            "compare",
+            "--config",
+            &missing("study.toml"),
+            "--out",
+            report.to_str().unwrap(),
+        ],
+        "check the path",
+        &report,
+    );
+}
+
+#[test]
 fn output_never_clobbers_input() {
     let (_dir, input) = tmp("pts.npy");
     let o = anisospec(&[

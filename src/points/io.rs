@@ -32,7 +32,7 @@ impl Format {
 /// Reads a point set from `.npy` or text, checking every value (see [`PointSets::new`]).
 pub fn read_points(path: &Path) -> Result<PointSets> {
     let format = Format::of(path)?;
-    let bytes = std::fs::read(path).map_err(|e| Error::io("read", path, e))?;
+    let bytes = std::fs::read(path).map_err(|e| Error::read_input(path, e))?;
     let named = |e: Error| match e {
         Error::Input(m) => Error::Input(format!("{}: {m}", path.display())),
         other => other,

@@ -36,8 +36,7 @@ impl Table {
                     let prefix = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
                     (dir.unwrap_or(Path::new(".")), prefix)
                 };
-                let entries =
-                    std::fs::read_dir(dir).map_err(|e| Error::io("list the folder", dir, e))?;
+                let entries = std::fs::read_dir(dir).map_err(|e| Error::read_input(dir, e))?;
                 let mut found: Vec<std::path::PathBuf> = entries
                     .filter_map(|e| e.ok())
                     .filter(|e| {

@@ -233,7 +233,7 @@ impl Target {
     /// Reads and checks a target file. Unknown keys, non-finite numbers, negative widths and radii,
     /// `s0 > s1` and unreadable images are errors (`Error::Input`) naming the problem.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io("read", path, e))?;
+        let text = std::fs::read_to_string(path).map_err(|e| Error::read_input(path, e))?;
         let mut target = Self::parse(&text).map_err(|e| match e {
             Error::Input(m) => Error::Input(format!("{}: {m}", path.display())),
             other => other,
@@ -595,7 +595,7 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
 
 /// The values and `[rows, cols]` of a 2D npy array of `float64` or `float32`.
 fn read_npy_image(path: &Path, bad: &dyn Fn(String) -> Error) -> Result<(Vec<f64>, [usize; 2])> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io("read the target image", path, e))?;
+    let bytes = std::fs::read(path).map_err(|e| Error::read_input(path, e))?;
     let npy = npyz::NpyFile::new(&bytes[..]).map_err(|e| bad(e.to_string()))?;
     let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
     let [rows, cols] = shape[..] else {

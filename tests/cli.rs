@@ -225,6 +225,44 @@ fn bad_point_files_are_rejected_and_left_untouched() {
 }
 
 #[test]
+fn sizes_above_the_coordinate_limit_are_refused_at_once() {
+    let (dir, out) = tmp("big.npy");
+    let o = out.to_str().unwrap();
+    let start = std::time::Instant::now();
+    rejects(
+        &["sample", "--sampler", "random", "-n", "1000000000", "-o", o],
+        "2000000000 coordinates (14.9 GiB) is above the limit",
+        &out,
+    );
+    assert!(start.elapsed().as_secs() < 10, "{:?}", start.elapsed());
+    let csv = dir.path().join("big.csv");
+    let huge = [
+        ("sample --sampler random -n 18446744073709551615", &out),
+        (
+            "sample --sampler random -n 4611686018427387904 --sets 4",
+            &out,
+        ),
+        // Each set fits, all eight together do not.
+        ("sample --sampler random -n 67108864 --sets 8", &out),
+        ("spectrum --sampler random -n 1000000000", &out),
+        ("spectrum --sampler random -n 1000000000 --dims 4", &out),
+        (
+            "variance --sampler random --integrand disc -n 16,1000000000",
+            &csv,
+        ),
+        (
+            "converge --sampler random --integrand disc -n 16,1000000000",
+            &csv,
+        ),
+    ];
+    for (command, file) in huge {
+        let mut args: Vec<&str> = command.split_whitespace().collect();
+        args.extend(["-o", file.to_str().unwrap()]);
+        rejects(&args, "smaller N or fewer sets", file);
+    }
+}
+
+#[test]
 fn missing_input_files_are_input_errors() {
     let (dir, out) = tmp("out.npy");
     let o = out.to_str().unwrap();

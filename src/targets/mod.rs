@@ -593,23 +593,12 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
     Ok((pixels, [rows, cols]))
 }
 
-/// The values and `[rows, cols]` of a 2D npy array of `float64` or `float32`.
+/// The values and `[rows, cols]` of a 2D npy array of `float64` or `float32`, in either order.
 fn read_npy_image(path: &Path, bad: &dyn Fn(String) -> Error) -> Result<(Vec<f64>, [usize; 2])> {
     let bytes = std::fs::read(path).map_err(|e| Error::read_input(path, e))?;
-    let npy = npyz::NpyFile::new(&bytes[..]).map_err(|e| bad(e.to_string()))?;
-    let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
+    let (shape, pixels) = crate::points::io::parse_npy_array(&bytes, true).map_err(bad)?;
     let [rows, cols] = shape[..] else {
         return Err(bad(format!("shape {shape:?}")));
-    };
-    let is_f32 = npy.dtype().num_bytes() == Some(4);
-    let pixels: Vec<f64> = if is_f32 {
-        npy.into_vec::<f32>()
-            .map_err(|e| bad(e.to_string()))?
-            .into_iter()
-            .map(f64::from)
-            .collect()
-    } else {
-        npy.into_vec::<f64>().map_err(|e| bad(e.to_string()))?
     };
     Ok((pixels, [rows, cols]))
 }

@@ -43,6 +43,21 @@ impl Error {
             source,
         }
     }
+
+    /// Wraps the failure to read a file the user named (a point set, a target, a config): a missing,
+    /// forbidden or non-file path, or text that is not UTF-8, is an input error naming the path and the
+    /// fix; anything else (the disk failing) stays an I/O error.
+    pub fn read_input(path: &Path, source: std::io::Error) -> Self {
+        use std::io::ErrorKind;
+        let fix = match source.kind() {
+            ErrorKind::NotFound | ErrorKind::NotADirectory => "check the path",
+            ErrorKind::PermissionDenied => "check the file's permissions",
+            ErrorKind::IsADirectory => "name a file, not a folder",
+            ErrorKind::InvalidData => "the file must be UTF-8 text",
+            _ => return Error::io("read", path, source),
+        };
+        Error::Input(format!("cannot read {}: {source}; {fix}", path.display()))
+    }
 }
 
 /// Result with the crate's [`Error`].

@@ -433,6 +433,198 @@ fn bad_point_files_are_rejected_and_left_untouched() {
     );
 }
 
+/// A version-1 npy file of `<f8` values: the header's `shape` text, its order flag, the values.
+fn npy_bytes(shape: &str, fortran: bool, values: &[f64]) -> Vec<u8> {
+    let order = if fortran { "True" } else { "False" };
+    let mut header = format!("{{'descr': '<f8', 'fortran_order': {order}, 'shape': {shape}, }}");
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend(u16::try_from(header.len()).unwrap().to_le_bytes());
+    bytes.extend(header.as_bytes());
+    bytes.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+    bytes
+}
+
+#[test]
+fn fortran_order_npy_gives_the_same_points_and_spectrum() {
+    let (sets, n, dims) = (3, 20, 2);
+    // Distinct values in [0, 1): any mix-up of the axes changes the points.
+    let c: Vec<f64> = (0..sets * n * dims)
+        .map(|i| ((i * 37) % 120) as f64 / 120.0)
+        .collect();
+    let mut f = vec![0.0; c.len()];
+    for s in 0..sets {
+        for j in 0..n {
+            for d in 0..dims {
+                f[s + sets * (j + n * d)] = c[(s * n + j) * dims + d];
+            }
+        }
+    }
+    let (dir, c_file) = tmp("c.npy");
+    let f_file = dir.path().join("f.npy");
+    std::fs::write(&c_file, npy_bytes("(3, 20, 2)", false, &c)).unwrap();
+    std::fs::write(&f_file, npy_bytes("(3, 20, 2)", true, &f)).unwrap();
+    let a = anisospec::points::io::read_points(&c_file).unwrap();
+    let b = anisospec::points::io::read_points(&f_file).unwrap();
+    assert_eq!(a.data(), &c[..]);
+    assert_eq!(a, b);
+    let mut spectra = Vec::new();
+    for (input, name) in [(&c_file, "sc.npy"), (&f_file, "sf.npy")] {
+        let out = dir.path().join(name);
+        let o = anisospec(&[
+            "spectrum",
+            "--input",
+            input.to_str().unwrap(),
+            "--res",
+            "8",
+            "--exact",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        spectra.push(std::fs::read(&out).unwrap());
+    }
+    assert_eq!(spectra[0], spectra[1]);
+}
+
+#[test]
+fn npy_headers_that_overflow_or_lie_are_rejected() {
+    // 2^62 x 2^62 x 4 elements wrap to 0 unchecked; then the empty data matched and spectrum hung.
+    let cases = [
+        (
+            "(4611686018427387904, 4611686018427387904, 4)",
+            0,
+            "more elements",
+        ),
+        ("(1, 16, 2)", 30, "cut short"),
+        ("(1, 16, 2)", 34, "header is wrong"),
+    ];
+    for (shape, values, needle) in cases {
+        let (dir, input) = tmp("crafted.npy");
+        let bytes = npy_bytes(shape, false, &vec![0.5; values]);
+        std::fs::write(&input, &bytes).unwrap();
+        let out = dir.path().join("spec.npy");
+        rejects(
+            &[
+                "spectrum",
+                "--input",
+                input.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            needle,
+            &out,
+        );
+        assert_eq!(std::fs::read(&input).unwrap(), bytes);
+    }
+}
+
+#[test]
+fn sizes_above_the_coordinate_limit_are_refused_at_once() {
+    let (dir, out) = tmp("big.npy");
+    let o = out.to_str().unwrap();
+    let start = std::time::Instant::now();
+    rejects(
+        &["sample", "--sampler", "random", "-n", "1000000000", "-o", o],
+        "2000000000 coordinates (14.9 GiB) is above the limit",
+        &out,
+    );
+    assert!(start.elapsed().as_secs() < 10, "{:?}", start.elapsed());
+    let csv = dir.path().join("big.csv");
+    let huge = [
+        ("sample --sampler random -n 18446744073709551615", &out),
+        (
+            "sample --sampler random -n 4611686018427387904 --sets 4",
+            &out,
+        ),
+        // Each set fits, all eight together do not.
+        ("sample --sampler random -n 67108864 --sets 8", &out),
+        ("spectrum --sampler random -n 1000000000", &out),
+        ("spectrum --sampler random -n 1000000000 --dims 4", &out),
+        (
+            "variance --sampler random --integrand disc -n 16,1000000000",
+            &csv,
+        ),
+        (
+            "converge --sampler random --integrand disc -n 16,1000000000",
+            &csv,
+        ),
+    ];
+    for (command, file) in huge {
+        let mut args: Vec<&str> = command.split_whitespace().collect();
+        args.extend(["-o", file.to_str().unwrap()]);
+        rejects(&args, "smaller N or fewer sets", file);
+    }
+}
+
+#[test]
+fn missing_input_files_are_input_errors() {
+    let (dir, out) = tmp("out.npy");
+    let o = out.to_str().unwrap();
+    let missing = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let (points, table, folder) = (
+        missing("nonexist.npy"),
+        missing("missing.npy"),
+        missing("nodir"),
+    );
+    rejects(
+        &["spectrum", "--input", &points, "-o", o],
+        "nonexist.npy",
+        &out,
+    );
+    for sampler in [
+        format!("table:{table}"),
+        format!("table:{folder}/t{{n}}.npy"),
+    ] {
+        rejects(
+            &["spectrum", "--sampler", &sampler, "-n", "16", "-o", o],
+            "check the path",
+            &out,
+        );
+    }
+    let target = missing("missing.toml");
+    rejects(
+        &["optimize", "--target", &target, "-n", "16", "-o", o],
+        "missing.toml",
+        &out,
+    );
+    // A target whose image is missing.
+    let image_target = dir.path().join("image.toml");
+    std::fs::write(
+        &image_target,
+        "kind = \"image\"\nfile = \"no-image.npy\"\nextent = 1.0\n",
+    )
+    .unwrap();
+    rejects(
+        &[
+            "optimize",
+            "--target",
+            image_target.to_str().unwrap(),
+            "-n",
+            "16",
+            "-o",
+            o,
+        ],
+        "no-image.npy",
+        &out,
+    );
+    let report = dir.path().join("report");
+    rejects(
+        &[
+            "compare",
+            "--config",
+            &missing("study.toml"),
+            "--out",
+            report.to_str().unwrap(),
+        ],
+        "check the path",
+        &report,
+    );
+}
+
 #[test]
 fn output_never_clobbers_input() {
     let (_dir, input) = tmp("pts.npy");

@@ -140,7 +140,7 @@ impl CompareConfig {
 
     /// Reads a TOML config; unknown keys, missing keys and bad values are input errors.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io("read", path, e))?;
+        let text = std::fs::read_to_string(path).map_err(|e| Error::read_input(path, e))?;
         let config: Self =
             toml::from_str(&text).map_err(|e| Error::Input(format!("{}: {e}", path.display())))?;
         config.validate().map_err(|e| match e {

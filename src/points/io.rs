@@ -32,7 +32,7 @@ impl Format {
 /// Reads a point set from `.npy` or text, checking every value (see [`PointSets::new`]).
 pub fn read_points(path: &Path) -> Result<PointSets> {
     let format = Format::of(path)?;
-    let bytes = std::fs::read(path).map_err(|e| Error::io("read", path, e))?;
+    let bytes = std::fs::read(path).map_err(|e| Error::read_input(path, e))?;
     let named = |e: Error| match e {
         Error::Input(m) => Error::Input(format!("{}: {m}", path.display())),
         other => other,
@@ -46,8 +46,7 @@ pub fn read_points(path: &Path) -> Result<PointSets> {
 
 fn parse_npy(bytes: &[u8]) -> Result<PointSets> {
     let bad = |why: String| Error::Input(format!("not a readable npy point set ({why})"));
-    let npy = npyz::NpyFile::new(bytes).map_err(|e| bad(e.to_string()))?;
-    let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
+    let (shape, data) = parse_npy_array(bytes, false).map_err(bad)?;
     let (sets, n, dims) = match shape[..] {
         [sets, n, d] => (sets, n, d),
         [n, d] => (1, n, d),
@@ -57,10 +56,150 @@ fn parse_npy(bytes: &[u8]) -> Result<PointSets> {
             )))
         }
     };
-    let data: Vec<f64> = npy
-        .into_vec::<f64>()
-        .map_err(|e| bad(format!("{e}; the array must be float64")))?;
     PointSets::new(sets, n, dims, data)
+}
+
+/// Reads the bytes of an npy file of `float64` (or, with `allow_f32`, also `float32`) values: the shape
+/// and the values in C (row-major) order, a Fortran-order array transposed into it.
+///
+/// The header's shape is checked before any data are read: a product of dimensions that overflows, or
+/// data shorter or longer than the shape needs, is an error. Errors give the reason alone, for the
+/// caller to name the file and the fix.
+pub fn parse_npy_array(
+    bytes: &[u8],
+    allow_f32: bool,
+) -> std::result::Result<(Vec<usize>, Vec<f64>), String> {
+    let (shape, data_start) = npy_header_shape(bytes)?;
+    // Every partial product of the dimensions (zeros skipped) must fit, as npyz forms them unchecked.
+    shape
+        .iter()
+        .try_fold(1usize, |acc, &d| acc.checked_mul(d.max(1)))
+        .ok_or_else(|| format!("shape {shape:?} has more elements than memory can address"))?;
+    let count: usize = shape.iter().product();
+    let npy = npyz::NpyFile::new(bytes).map_err(|e| e.to_string())?;
+    if npy
+        .shape()
+        .iter()
+        .map(|&d| d as usize)
+        .ne(shape.iter().copied())
+    {
+        return Err(format!(
+            "the header's shape is ambiguous ({:?} or {shape:?})",
+            npy.shape()
+        ));
+    }
+    let wanted = if allow_f32 {
+        "float64 or float32"
+    } else {
+        "float64"
+    };
+    let item = match npy.dtype().num_bytes() {
+        Some(b @ 8) => b,
+        Some(b @ 4) if allow_f32 => b,
+        _ => {
+            return Err(format!(
+                "dtype {}; the array must be {wanted}",
+                npy.dtype().descr()
+            ))
+        }
+    };
+    let held = bytes.len() - data_start;
+    if count.checked_mul(item) != Some(held) {
+        return Err(format!(
+            "the header's shape {shape:?} needs {count} values of {item} bytes but the file holds {held} bytes of data; the file is cut short or its header is wrong"
+        ));
+    }
+    let fortran = npy.order() == npyz::Order::Fortran;
+    let values: Vec<f64> = if item == 4 {
+        npy.into_vec::<f32>()
+            .map_err(|e| format!("{e}; the array must be {wanted}"))?
+            .into_iter()
+            .map(f64::from)
+            .collect()
+    } else {
+        npy.into_vec::<f64>()
+            .map_err(|e| format!("{e}; the array must be {wanted}"))?
+    };
+    Ok(if fortran {
+        let c_order = fortran_to_c(&shape, &values);
+        (shape, c_order)
+    } else {
+        (shape, values)
+    })
+}
+
+/// The shape in an npy file's header and where its data start, read without npyz, which multiplies
+/// the dimensions unchecked.
+fn npy_header_shape(bytes: &[u8]) -> std::result::Result<(Vec<usize>, usize), String> {
+    let rest = bytes
+        .strip_prefix(b"\x93NUMPY")
+        .ok_or("no npy magic \\x93NUMPY at the start")?;
+    let cut = || "the header is cut short".to_string();
+    let (len, text_start) = match rest.first() {
+        Some(1) => {
+            let b = rest.get(2..4).ok_or_else(cut)?;
+            (usize::from(u16::from_le_bytes([b[0], b[1]])), 10)
+        }
+        Some(2 | 3) => {
+            let b = rest.get(2..6).ok_or_else(cut)?;
+            let len = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            (usize::try_from(len).map_err(|_| cut())?, 12)
+        }
+        Some(v) => return Err(format!("npy format version {v}, not 1, 2 or 3")),
+        None => return Err(cut()),
+    };
+    let data_start = text_start + len;
+    let text = bytes.get(text_start..data_start).ok_or_else(cut)?;
+    let text = String::from_utf8_lossy(text);
+    let no_shape = || "the header has no readable 'shape'".to_string();
+    // The key 'shape' is followed by a colon; a field of that name in a structured dtype is not.
+    let tuple = ["'shape'", "\"shape\""]
+        .iter()
+        .flat_map(|key| text.match_indices(key).map(|(at, k)| at + k.len()))
+        .find_map(|after| text[after..].trim_start().strip_prefix(':'))
+        .and_then(|value| value.trim_start().strip_prefix('('))
+        .and_then(|value| value.split_once(')'))
+        .ok_or_else(no_shape)?
+        .0;
+    let shape = tuple
+        .split(',')
+        .map(str::trim)
+        .filter(|d| !d.is_empty())
+        .map(|d| d.parse::<usize>().map_err(|_| no_shape()))
+        .collect::<std::result::Result<_, _>>()?;
+    Ok((shape, data_start))
+}
+
+/// The values of a Fortran-order array of `shape` (first index fastest) in C order (last index
+/// fastest). The product of `shape` is the length of `values`.
+fn fortran_to_c(shape: &[usize], values: &[f64]) -> Vec<f64> {
+    let strides: Vec<usize> = shape
+        .iter()
+        .scan(1, |acc, &d| {
+            let stride = *acc;
+            *acc *= d;
+            Some(stride)
+        })
+        .collect();
+    let mut index = vec![0; shape.len()];
+    let mut out = Vec::with_capacity(values.len());
+    for _ in 0..values.len() {
+        out.push(
+            values[index
+                .iter()
+                .zip(&strides)
+                .map(|(i, s)| i * s)
+                .sum::<usize>()],
+        );
+        for (i, &d) in index.iter_mut().zip(shape).rev() {
+            *i += 1;
+            if *i < d {
+                break;
+            }
+            *i = 0;
+        }
+    }
+    out
 }
 
 fn parse_text(text: &str) -> Result<PointSets> {
@@ -142,6 +281,83 @@ mod tests {
         let p = parse_text("0.1 0.2\n0.3 0.4\n#\n0.5 0.6\n0.7 0.8\n#\n").unwrap();
         assert_eq!((p.sets(), p.n(), p.dims()), (2, 2, 2));
         assert_eq!(p.set(1), &[0.5, 0.6, 0.7, 0.8]);
+    }
+
+    /// A version-1 npy file: dtype `descr`, the header's `shape` text, the raw data bytes.
+    fn npy(descr: &str, fortran: bool, shape: &str, data: &[u8]) -> Vec<u8> {
+        let order = if fortran { "True" } else { "False" };
+        let mut header =
+            format!("{{'descr': '{descr}', 'fortran_order': {order}, 'shape': {shape}, }}");
+        while (10 + header.len() + 1) % 64 != 0 {
+            header.push(' ');
+        }
+        header.push('\n');
+        let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+        bytes.extend(u16::try_from(header.len()).unwrap().to_le_bytes());
+        bytes.extend(header.as_bytes());
+        bytes.extend(data);
+        bytes
+    }
+
+    fn f8(values: &[f64]) -> Vec<u8> {
+        values.iter().flat_map(|v| v.to_le_bytes()).collect()
+    }
+
+    #[test]
+    fn fortran_order_reads_as_the_same_array() {
+        // [2 sets, 3 points, 2 dims]; Fortran order stores (s, j, d) at s + 2 (j + 3 d).
+        let c: Vec<f64> = (0..12).map(|i| f64::from(i) / 12.0).collect();
+        let mut f = vec![0.0; 12];
+        for s in 0..2 {
+            for j in 0..3 {
+                for d in 0..2 {
+                    f[s + 2 * (j + 3 * d)] = c[(s * 3 + j) * 2 + d];
+                }
+            }
+        }
+        let a = parse_npy(&npy("<f8", false, "(2, 3, 2)", &f8(&c))).unwrap();
+        let b = parse_npy(&npy("<f8", true, "(2, 3, 2)", &f8(&f))).unwrap();
+        assert_eq!(a.data(), &c[..]);
+        assert_eq!(a, b);
+        // A 2 x 3 float32 image, as target images are read: (r, c) at r + 2 c in Fortran order.
+        let f4: Vec<u8> = [0.0f32, 3.0, 1.0, 4.0, 2.0, 5.0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let (shape, pixels) = parse_npy_array(&npy("<f4", true, "(2, 3)", &f4), true).unwrap();
+        assert_eq!(shape, [2, 3]);
+        assert_eq!(pixels, [0.0, 1.0, 2.0, 3.0, 4.0, 5.0]);
+        // Points must be float64.
+        assert!(parse_npy(&npy("<f4", false, "(3, 2)", &f4)).is_err());
+    }
+
+    #[test]
+    fn shapes_that_overflow_or_disagree_with_the_data_are_rejected() {
+        let message = |bytes: Vec<u8>| parse_npy(&bytes).unwrap_err().to_string();
+        // 2^62 x 2^62 x 4 wraps to 0 elements unchecked, and 0 bytes of data would then match it.
+        let e = message(npy(
+            "<f8",
+            false,
+            "(4611686018427387904, 4611686018427387904, 4)",
+            &[],
+        ));
+        assert!(e.contains("more elements"), "{e}");
+        // The same with zero data in front, and in Fortran order, where npyz forms 2^62 x 2^62 first.
+        let e = message(npy(
+            "<f8",
+            true,
+            "(4611686018427387904, 4611686018427387904, 0)",
+            &[],
+        ));
+        assert!(e.contains("more elements"), "{e}");
+        for (shape, values) in [("(1, 4, 2)", 6), ("(1, 2, 2)", 6), ("(1, 134217728, 4)", 0)] {
+            let e = message(npy("<f8", false, shape, &f8(&vec![0.5; values])));
+            assert!(
+                e.contains("cut short or its header is wrong"),
+                "{shape}: {e}"
+            );
+        }
+        assert!(parse_npy(&npy("<f8", false, "(1, 2, 2)", &f8(&[0.5; 4]))).is_ok());
     }
 
     #[test]

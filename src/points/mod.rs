@@ -9,6 +9,36 @@ use crate::error::{Error, Result};
 /// Names of the four dimensions of a 4D set: pixel position `x, y`, lens position `u, v`.
 pub const DIM_NAMES: [char; 4] = ['x', 'y', 'u', 'v'];
 
+/// The most coordinates (`N × sets × D`) one array of points may hold: 2^28 `f64`, 2 GiB. Sizes are
+/// checked against it before a set is drawn, so a mistyped `-n` is a message rather than an abort.
+pub const MAX_COORDINATES: usize = 1 << 28;
+
+/// `sets × n × dims`, the number of coordinates of `sets` sets of `n` points in `dims` dimensions, if it
+/// is at most [`MAX_COORDINATES`]; else a message naming the size, the limit and the fix.
+pub fn coordinate_count(sets: usize, n: usize, dims: usize) -> std::result::Result<usize, String> {
+    let total = sets.checked_mul(n).and_then(|c| c.checked_mul(dims));
+    match total {
+        Some(c) if c <= MAX_COORDINATES => Ok(c),
+        _ => {
+            let approx = sets as f64 * n as f64 * dims as f64;
+            let short = |x: f64| {
+                if x < 1e6 {
+                    format!("{x:.1}")
+                } else {
+                    format!("{x:.2e}")
+                }
+            };
+            let count = total.map_or_else(|| format!("{approx:.2e}"), |c| c.to_string());
+            let gib = |c: f64| c * 8.0 / f64::from(1u32 << 30);
+            Err(format!(
+                "N × sets × D = {n} × {sets} × {dims} = {count} coordinates ({} GiB) is above the limit of {MAX_COORDINATES} ({} GiB); use a smaller N or fewer sets",
+                short(gib(approx)),
+                gib(MAX_COORDINATES as f64)
+            ))
+        }
+    }
+}
+
 /// `sets` point sets of `n` points each in `dims` dimensions, on the torus `[0,1)^dims`.
 ///
 /// Stored row-major as `[sets, n, dims]`, like the npy files: coordinate `d` of point `j` of set `s` is
@@ -22,8 +52,8 @@ pub struct PointSets {
 }
 
 impl PointSets {
-    /// Checks shape and values: `dims` is 2 or 4, at least one set of at least one point, every
-    /// coordinate finite and in `[0, 1]`; a coordinate equal to 1 is the torus point 0 and is stored so.
+    /// Checks shape and values: `dims` is 2 or 4, at least one set of at least one point, at most
+    /// [`MAX_COORDINATES`] coordinates, as many as the shape needs, every coordinate finite and in `[0, 1]`; a coordinate equal to 1 is the torus point 0 and is stored so.
     pub fn new(sets: usize, n: usize, dims: usize, mut data: Vec<f64>) -> Result<Self> {
         if dims != 2 && dims != 4 {
             return Err(Error::Input(format!(
@@ -35,7 +65,8 @@ impl PointSets {
                 "the point set is empty ({sets} sets of {n} points); give at least one set of at least one point"
             )));
         }
-        if data.len() != sets * n * dims {
+        let len = coordinate_count(sets, n, dims).map_err(Error::Input)?;
+        if data.len() != len {
             return Err(Error::Input(format!(
                 "{} coordinates do not fill {sets} sets x {n} points x {dims} dims",
                 data.len()
@@ -217,6 +248,18 @@ mod tests {
         assert!(Projection::parse("xu", 2).is_err());
         assert!(Projection::parse("xx", 4).is_err());
         assert!(Projection::parse("xq", 4).is_err());
+    }
+
+    #[test]
+    fn sizes_are_checked_without_overflow() {
+        // 2^62 x 2^62 x 4 wraps to 0, which an empty vector would match.
+        let e = PointSets::new(1 << 62, 1 << 62, 4, Vec::new()).unwrap_err();
+        assert!(e.to_string().contains("above the limit"), "{e}");
+        let e = coordinate_count(1, 1_000_000_000, 2).unwrap_err();
+        assert!(e.contains("2000000000 coordinates (14.9 GiB)"), "{e}");
+        assert_eq!(coordinate_count(4, 1 << 25, 2), Ok(MAX_COORDINATES));
+        assert!(coordinate_count(4, (1 << 25) + 1, 2).is_err());
+        assert!(PointSets::new(1, 2, 2, vec![0.5; 3]).is_err());
     }
 
     #[test]

@@ -15,7 +15,7 @@ pub mod table;
 pub use compose::{Paired, Pairing, Sheared};
 
 use crate::error::{Error, Result};
-use crate::points::PointSets;
+use crate::points::{coordinate_count, PointSets};
 use crate::rng::{self, Rng};
 use rayon::prelude::*;
 
@@ -45,7 +45,8 @@ pub trait Sampler: Send + Sync {
     }
 }
 
-/// Checks `n` for `sampler`, with a message naming the nearest valid `n`.
+/// Checks `n` for `sampler`, with a message naming the nearest valid `n`. One set of `n` points must fit
+/// under [`crate::points::MAX_COORDINATES`]; the commands check every N here before drawing.
 pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
     if n == 0 {
         return Err(Error::Usage(format!(
@@ -54,6 +55,7 @@ pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
             usable_n(sampler, 1)
         )));
     }
+    coordinate_count(1, n, sampler.dims()).map_err(Error::Usage)?;
     sampler.check_n(n).map_err(|nearest| {
         Error::Usage(format!(
             "{} cannot make {n} points; the nearest N it allows is {nearest}",
@@ -68,14 +70,16 @@ pub fn usable_n(sampler: &dyn Sampler, n: usize) -> usize {
 }
 
 /// Draws `sets` independent sets of `n` points. Set `s` uses stream `s` of `seed`: the result does not
-/// depend on the number of threads.
+/// depend on the number of threads. All sets together must fit under
+/// [`crate::points::MAX_COORDINATES`], checked before any is drawn.
 pub fn generate_sets(sampler: &dyn Sampler, n: usize, sets: usize, seed: u64) -> Result<PointSets> {
-    validate_n(sampler, n)?;
     if sets == 0 {
         return Err(Error::Usage(
             "--sets 0 asks for nothing; give at least one set".into(),
         ));
     }
+    coordinate_count(sets, n, sampler.dims()).map_err(Error::Usage)?;
+    validate_n(sampler, n)?;
     let all: Vec<Vec<f64>> = (0..sets)
         .into_par_iter()
         .map(|s| sampler.generate(n, &mut rng::stream(seed, s as u64)))
@@ -279,6 +283,21 @@ mod tests {
         assert_eq!(edit_distance("sobol", "sobol"), 0);
         assert_eq!(edit_distance("", "oa"), 2);
         assert_eq!(edit_distance("kitten", "sitting"), 3);
+    }
+
+    #[test]
+    fn sizes_above_the_limit_are_refused_before_drawing() {
+        let random = grid::Random { dims: 2 };
+        for (n, sets) in [(usize::MAX, 1), (1 << 62, 4), (1 << 28, 1), (1 << 26, 8)] {
+            let e = generate_sets(&random, n, sets, 0).unwrap_err();
+            assert_eq!(e.exit_code(), 2);
+            assert!(
+                e.to_string().contains("above the limit"),
+                "{n} x {sets}: {e}"
+            );
+        }
+        assert!(validate_n(&random, 1 << 27).is_ok());
+        assert!(validate_n(&grid::Random { dims: 4 }, 1 << 27).is_err());
     }
 
     #[test]

@@ -112,8 +112,7 @@ pub fn files(pattern: &str) -> Result<Vec<(PathBuf, Option<usize>)>> {
                 let prefix = path.file_name().and_then(|f| f.to_str()).unwrap_or("");
                 (dir.unwrap_or(Path::new(".")), prefix)
             };
-            let entries =
-                std::fs::read_dir(dir).map_err(|e| Error::io("list the folder", dir, e))?;
+            let entries = std::fs::read_dir(dir).map_err(|e| Error::read_input(dir, e))?;
             let mut found: Vec<(PathBuf, Option<usize>)> = entries
                 .filter_map(|e| e.ok())
                 .filter_map(|e| {

@@ -233,7 +233,7 @@ impl Target {
     /// Reads and checks a target file. Unknown keys, non-finite numbers, negative widths and radii,
     /// `s0 > s1` and unreadable images are errors (`Error::Input`) naming the problem.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io("read", path, e))?;
+        let text = std::fs::read_to_string(path).map_err(|e| Error::read_input(path, e))?;
         let mut target = Self::parse(&text).map_err(|e| match e {
             Error::Input(m) => Error::Input(format!("{}: {m}", path.display())),
             other => other,
@@ -600,23 +600,12 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
     Ok((pixels, [rows, cols]))
 }
 
-/// The values and `[rows, cols]` of a 2D npy array of `float64` or `float32`.
+/// The values and `[rows, cols]` of a 2D npy array of `float64` or `float32`, in either order.
 fn read_npy_image(path: &Path, bad: &dyn Fn(String) -> Error) -> Result<(Vec<f64>, [usize; 2])> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io("read the target image", path, e))?;
-    let npy = npyz::NpyFile::new(&bytes[..]).map_err(|e| bad(e.to_string()))?;
-    let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
+    let bytes = std::fs::read(path).map_err(|e| Error::read_input(path, e))?;
+    let (shape, pixels) = crate::points::io::parse_npy_array(&bytes, true).map_err(bad)?;
     let [rows, cols] = shape[..] else {
         return Err(bad(format!("shape {shape:?}")));
-    };
-    let is_f32 = npy.dtype().num_bytes() == Some(4);
-    let pixels: Vec<f64> = if is_f32 {
-        npy.into_vec::<f32>()
-            .map_err(|e| bad(e.to_string()))?
-            .into_iter()
-            .map(f64::from)
-            .collect()
-    } else {
-        npy.into_vec::<f64>().map_err(|e| bad(e.to_string()))?
     };
     Ok((pixels, [rows, cols]))
 }

@@ -291,3 +291,52 @@ fn compare_rejects_a_bad_config_before_any_work() {
         rejects(&["compare", "--config", c, "--out", o], needle, &out);
     }
 }
+
+/// Numbers in a compare config that would fail late, panic or write a number that is not one are
+/// refused up front: exit 2, a message naming the config key
+/// (not a command-line flag), and no report folder.
+#[test]
+fn compare_rejects_bad_numbers_before_any_work() {
+    let (dir, config) = tmp("study.toml");
+    let out = dir.path().join("report");
+    let o = out.to_str().unwrap();
+    let c = config.to_str().unwrap();
+    type Mend = fn(&mut CompareConfig);
+    let cases: Vec<(Mend, &str)> = vec![
+        (|c| c.table_seconds = f64::NAN, "table_seconds = NaN"),
+        (|c| c.table_seconds = 1e20, "at most 1e6"),
+        (|c| c.table_seconds = -1.0, "table_seconds = -1"),
+        (
+            |c| c.analytic[0].shear = [f64::NAN; 2],
+            "shear = [NaN, NaN]",
+        ),
+        (
+            |c| c.analytic[1].shear_range = [f64::NAN; 2],
+            "shear_range = [NaN, NaN]",
+        ),
+        (
+            |c| c.analytic[1].shear_range = [0.3, 1e3],
+            "at most 100 in magnitude",
+        ),
+        (|c| c.spectra_res = 7, "spectra_res = 7"),
+        (|c| c.spectra_res = 0, "spectra_res = 0"),
+        (|c| c.spectra_n = 0, "spectra_n = 0"),
+        (|c| c.spectra_realizations = 0, "spectra_realizations = 0"),
+        (|c| c.table_sets = 0, "table_sets = 0"),
+        (|c| c.ns = vec![1, 16], "ns asks for N = 1"),
+        (|c| c.spectra_n = 1, "spectra_n asks for N = 1"),
+        (|c| c.pixel_reference_count = 1000, "pixel_reference_count"),
+    ];
+    for (mend, needle) in cases {
+        let mut study = CompareConfig::default_suite();
+        mend(&mut study);
+        std::fs::write(&config, toml::to_string(&study).unwrap()).unwrap();
+        let args = ["compare", "--config", c, "--out", o];
+        rejects(&args, needle, &out);
+        let err = String::from_utf8_lossy(&anisospec(&args).stderr).into_owned();
+        assert!(
+            !err.contains(" --") && !err.contains(" -n "),
+            "{needle}: '{err}' names a flag"
+        );
+    }
+}

@@ -238,6 +238,14 @@ fn load_table(path: &Path, n: usize) -> Result<Table> {
     }
 }
 
+/// Checks, without optimizing, that a table of `target` can be built at `n` points for a subject
+/// whose shears span `range`: the error [`TableCache::sampler`] would meet before its first iteration.
+pub fn check_buildable(target: Target, range: (f64, f64), n: usize) -> Result<()> {
+    let framed = within_reach(table_frame(target, range), n)?;
+    table_setup(framed, n, 1.0).objective()?;
+    crate::samplers::validate_n(crate::samplers::build(start_sampler(n), 4)?.as_ref(), n)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

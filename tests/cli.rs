@@ -292,11 +292,11 @@ fn compare_rejects_a_bad_config_before_any_work() {
     }
 }
 
-/// Numbers in a compare config that would fail late, panic or write a number that is not one are
-/// refused up front: exit 2, a message naming the config key
+/// Numbers and names in a compare config that would fail late, panic, write a number that is not one,
+/// or overwrite one output with another are refused up front: exit 2, a message naming the config key
 /// (not a command-line flag), and no report folder.
 #[test]
-fn compare_rejects_bad_numbers_before_any_work() {
+fn compare_rejects_bad_numbers_and_clashing_names_before_any_work() {
     let (dir, config) = tmp("study.toml");
     let out = dir.path().join("report");
     let o = out.to_str().unwrap();
@@ -322,9 +322,51 @@ fn compare_rejects_bad_numbers_before_any_work() {
         (|c| c.spectra_res = 0, "spectra_res = 0"),
         (|c| c.spectra_n = 0, "spectra_n = 0"),
         (|c| c.spectra_realizations = 0, "spectra_realizations = 0"),
+        (
+            |c| {
+                c.classical.clear();
+                c.sheared.clear();
+                c.tables.clear();
+            },
+            "no sampler",
+        ),
+        (
+            |c| c.shear_modes.clear(),
+            "shear_modes is empty, so none would run",
+        ),
         (|c| c.table_sets = 0, "table_sets = 0"),
         (|c| c.ns = vec![1, 16], "ns asks for N = 1"),
         (|c| c.spectra_n = 1, "spectra_n asks for N = 1"),
+        (
+            |c| {
+                c.analytic[0].label = "edge a".into();
+                c.analytic[1].label = "edge-a".into();
+            },
+            "'edge a' and 'edge-a' both make the file name 'edge_a'",
+        ),
+        (
+            |c| c.classical = vec!["random".into(), "random".into()],
+            "classical lists 'random' twice",
+        ),
+        (
+            |c| c.shear_modes.push(c.shear_modes[0]),
+            "shear_modes lists 'transported' twice",
+        ),
+        (
+            |c| c.tables.push("./targets/hairline.toml".into()),
+            "both would be 'optimized hairline'",
+        ),
+        (
+            |c| {
+                c.analytic.clear();
+                c.pixel_classes.clear();
+            },
+            "nothing to integrate",
+        ),
+        (
+            |c| c.pixel_classes.push("hairline".into()),
+            "pixel_classes lists 'hairline' twice",
+        ),
         (|c| c.pixel_reference_count = 1000, "pixel_reference_count"),
     ];
     for (mend, needle) in cases {
@@ -339,4 +381,39 @@ fn compare_rejects_bad_numbers_before_any_work() {
             "{needle}: '{err}' names a flag"
         );
     }
+}
+
+/// An analytic label that makes the same file name as a pixel's (known only once the oracle has
+/// picked the pixel) is refused before anything is measured or written.
+#[test]
+fn compare_rejects_a_label_clashing_with_a_pixel() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut study = CompareConfig {
+        pixel_classes: vec!["hairline".into()],
+        pixel_reference_count: 1 << 10,
+        ..CompareConfig::default_suite()
+    };
+    let pixel = anisospec::compare::subjects(&study, dir.path()).unwrap()[3]
+        .label
+        .clone();
+    study.analytic[0].label = pixel.replace(' ', "-").to_uppercase();
+    let config = dir.path().join("study.toml");
+    std::fs::write(&config, toml::to_string(&study).unwrap()).unwrap();
+    let out = dir.path().join("report");
+    rejects(
+        &[
+            "compare",
+            "--config",
+            config.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--cache",
+            dir.path().join("cache").to_str().unwrap(),
+        ],
+        &format!(
+            "'{}' and '{pixel}' both make the file name",
+            study.analytic[0].label
+        ),
+        &out,
+    );
 }

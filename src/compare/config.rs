@@ -160,7 +160,8 @@ impl CompareConfig {
         Ok(config)
     }
 
-    /// Checks sizes and names that would otherwise fail mid-run.
+    /// Checks, before any work, everything in the config that would otherwise fail mid-run, put a
+    /// number that is not one in the report, or make two outputs share a file name.
     pub fn validate(&self) -> Result<()> {
         if self.ns.len() < 2 || self.ns.contains(&0) {
             return Err(Error::Usage(
@@ -197,6 +198,16 @@ impl CompareConfig {
                 "ns lists N = {n} twice; give each size once, e.g. ns = [16, 64, 256]"
             )));
         }
+        if self.analytic.is_empty() && self.pixel_classes.is_empty() {
+            return Err(Error::Usage(
+                "analytic and pixel_classes are both empty, so there is nothing to integrate; add an [[analytic]] entry or a pixel class, e.g. pixel_classes = [\"hairline\"]".into(),
+            ));
+        }
+        if let Some(c) = first_repeat(&self.pixel_classes) {
+            return Err(Error::Usage(format!(
+                "pixel_classes lists '{c}' twice; give each class once"
+            )));
+        }
         if !self.pixel_classes.is_empty() {
             crate::render::pixel::check_ref_count(self.pixel_reference_count).map_err(|e| {
                 Error::Usage(format!(
@@ -207,6 +218,24 @@ impl CompareConfig {
         }
         for name in self.classical.iter().chain(&self.sheared) {
             crate::samplers::build(name, 4)?;
+        }
+        for (key, list) in [("classical", &self.classical), ("sheared", &self.sheared)] {
+            if let Some(name) = first_repeat(list) {
+                return Err(Error::Usage(format!(
+                    "{key} lists '{name}' twice; give each sampler once"
+                )));
+            }
+        }
+        if let Some(mode) = first_repeat(&self.shear_modes) {
+            return Err(Error::Usage(format!(
+                "shear_modes lists '{}' twice; give each mode once",
+                format!("{mode:?}").to_lowercase()
+            )));
+        }
+        if !self.sheared.is_empty() && self.shear_modes.is_empty() {
+            return Err(Error::Usage(
+                "sheared lists samplers but shear_modes is empty, so none would run; give shear_modes = [\"transported\"] (or [\"transported\", \"wrap\"]), or sheared = []".into(),
+            ));
         }
         for (i, e) in self.analytic.iter().enumerate() {
             for (key, pair) in [("shear", e.shear), ("shear_range", e.shear_range)] {
@@ -247,8 +276,11 @@ impl CompareConfig {
                 )));
             }
         }
+        let labels: Vec<String> = self.analytic.iter().map(|e| e.label.clone()).collect();
+        check_file_names(&labels, "analytic integrand labels")?;
         self.validate_spectra()?;
-        self.validate_tables()
+        self.validate_tables()?;
+        self.validate_sampler_labels()
     }
 
     /// `table_seconds`, `table_sets`, and every table target at every N it is built for (`ns` and
@@ -308,7 +340,40 @@ impl CompareConfig {
                 }
             }
         }
+        for (i, a) in self.tables.iter().enumerate() {
+            if let Some(b) = self.tables[..i]
+                .iter()
+                .find(|b| b.file_stem() == a.file_stem())
+            {
+                return Err(Error::Usage(format!(
+                    "tables lists {} and {}, which share the file name stem, so both would be '{}' in the report; give each target once, or copy one to a file of another name",
+                    b.display(),
+                    a.display(),
+                    super::SamplerSpec::Table(a.clone()).label()
+                )));
+            }
+        }
         Ok(())
+    }
+
+    /// At least one sampler, and sampler labels that are distinct, safe in CSV and markdown, and
+    /// distinct as file names.
+    fn validate_sampler_labels(&self) -> Result<()> {
+        let labels: Vec<String> = super::sampler_specs(self)
+            .iter()
+            .map(super::SamplerSpec::label)
+            .collect();
+        if labels.is_empty() {
+            return Err(Error::Usage(
+                "classical, sheared and tables are all empty, so there is no sampler to compare; list at least one, e.g. classical = [\"sobol\"]".into(),
+            ));
+        }
+        if let Some(l) = labels.iter().find(|l| l.contains(['"', '|', '\n', '\r'])) {
+            return Err(Error::Usage(format!(
+                "sampler {l:?}: a sampler's name (or a table target's file stem) must hold no '\"', '|' or line break (it goes into CSV and markdown tables)"
+            )));
+        }
+        check_file_names(&labels, "samplers")
     }
 
     /// The spectra gallery's size, grid side and realizations.
@@ -332,4 +397,33 @@ impl CompareConfig {
         }
         Ok(())
     }
+}
+
+/// The first item of `list` that appears in it again.
+fn first_repeat<T: PartialEq>(list: &[T]) -> Option<&T> {
+    list.iter()
+        .enumerate()
+        .find(|&(i, x)| list[..i].contains(x))
+        .map(|(_, x)| x)
+}
+
+/// Refuses two of `labels` (`what`, e.g. `samplers`) that are equal or that make the same file name
+/// in the report (which keeps only letters and digits: `edge a` and `edge-a` are both `edge_a`),
+/// naming both.
+pub fn check_file_names(labels: &[String], what: &str) -> Result<()> {
+    for (i, a) in labels.iter().enumerate() {
+        let slug = super::report::slug(a);
+        if let Some(b) = labels[..i].iter().find(|b| super::report::slug(b) == slug) {
+            return Err(if a == b {
+                Error::Usage(format!(
+                    "{what}: '{a}' appears twice; the report names rows and files after it, so give each once"
+                ))
+            } else {
+                Error::Usage(format!(
+                    "{what}: '{b}' and '{a}' both make the file name '{slug}' in the report (which keeps only letters and digits); make them differ in a letter or digit"
+                ))
+            });
+        }
+    }
+    Ok(())
 }

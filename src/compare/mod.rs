@@ -251,6 +251,8 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
     config.validate()?;
     let started = Instant::now();
     let subjects = subjects(config, cache_dir)?;
+    let labels: Vec<String> = subjects.iter().map(|s| s.label.clone()).collect();
+    config::check_file_names(&labels, "integrands (analytic labels and pixels)")?;
     let specs = sampler_specs(config);
     let tables = tables::TableCache::new(config, cache_dir);
     let cfg = ConvergeConfig {

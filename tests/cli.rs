@@ -417,3 +417,35 @@ fn compare_rejects_a_label_clashing_with_a_pixel() {
         &out,
     );
 }
+
+/// A report folder (or a cache folder) that is, or lies under, an existing file is refused before
+/// any work, and the file is left as it was.
+#[test]
+fn compare_refuses_an_output_folder_that_is_a_file() {
+    let (dir, file) = tmp("taken");
+    std::fs::write(&file, "mine").unwrap();
+    let f = file.to_str().unwrap();
+    let under = file.join("report");
+    let report = dir.path().join("report");
+    let cases = [
+        (vec!["--out", f], "--out"),
+        (vec!["--out", under.to_str().unwrap()], "lies under"),
+        (
+            vec!["--out", report.to_str().unwrap(), "--cache", f],
+            "--cache",
+        ),
+    ];
+    for (flags, needle) in cases {
+        let mut args = vec!["compare"];
+        args.extend(&flags);
+        let o = anisospec(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains(needle) && err.contains("not a folder"),
+            "{args:?}: '{err}' lacks '{needle}'"
+        );
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
+        assert!(!report.exists());
+    }
+}

@@ -692,3 +692,161 @@ fn compare_rejects_a_bad_config_before_any_work() {
         rejects(&["compare", "--config", c, "--out", o], needle, &out);
     }
 }
+
+/// Numbers and names in a compare config that would fail late, panic, write a number that is not one,
+/// or overwrite one output with another are refused up front: exit 2, a message naming the config key
+/// (not a command-line flag), and no report folder.
+#[test]
+fn compare_rejects_bad_numbers_and_clashing_names_before_any_work() {
+    let (dir, config) = tmp("study.toml");
+    let out = dir.path().join("report");
+    let o = out.to_str().unwrap();
+    let c = config.to_str().unwrap();
+    type Mend = fn(&mut CompareConfig);
+    let cases: Vec<(Mend, &str)> = vec![
+        (|c| c.table_seconds = f64::NAN, "table_seconds = NaN"),
+        (|c| c.table_seconds = 1e20, "at most 1e6"),
+        (|c| c.table_seconds = -1.0, "table_seconds = -1"),
+        (
+            |c| c.analytic[0].shear = [f64::NAN; 2],
+            "shear = [NaN, NaN]",
+        ),
+        (
+            |c| c.analytic[1].shear_range = [f64::NAN; 2],
+            "shear_range = [NaN, NaN]",
+        ),
+        (
+            |c| c.analytic[1].shear_range = [0.3, 1e3],
+            "at most 100 in magnitude",
+        ),
+        (|c| c.spectra_res = 7, "spectra_res = 7"),
+        (|c| c.spectra_res = 0, "spectra_res = 0"),
+        (|c| c.spectra_n = 0, "spectra_n = 0"),
+        (|c| c.spectra_realizations = 0, "spectra_realizations = 0"),
+        (
+            |c| {
+                c.classical.clear();
+                c.sheared.clear();
+                c.tables.clear();
+            },
+            "no sampler",
+        ),
+        (
+            |c| c.shear_modes.clear(),
+            "shear_modes is empty, so none would run",
+        ),
+        (|c| c.table_sets = 0, "table_sets = 0"),
+        (|c| c.ns = vec![1, 16], "ns asks for N = 1"),
+        (|c| c.spectra_n = 1, "spectra_n asks for N = 1"),
+        (
+            |c| {
+                c.analytic[0].label = "edge a".into();
+                c.analytic[1].label = "edge-a".into();
+            },
+            "'edge a' and 'edge-a' both make the file name 'edge_a'",
+        ),
+        (
+            |c| c.classical = vec!["random".into(), "random".into()],
+            "classical lists 'random' twice",
+        ),
+        (
+            |c| c.shear_modes.push(c.shear_modes[0]),
+            "shear_modes lists 'transported' twice",
+        ),
+        (
+            |c| c.tables.push("./targets/hairline.toml".into()),
+            "both would be 'optimized hairline'",
+        ),
+        (
+            |c| {
+                c.analytic.clear();
+                c.pixel_classes.clear();
+            },
+            "nothing to integrate",
+        ),
+        (
+            |c| c.pixel_classes.push("hairline".into()),
+            "pixel_classes lists 'hairline' twice",
+        ),
+        (|c| c.pixel_reference_count = 1000, "pixel_reference_count"),
+    ];
+    for (mend, needle) in cases {
+        let mut study = CompareConfig::default_suite();
+        mend(&mut study);
+        std::fs::write(&config, toml::to_string(&study).unwrap()).unwrap();
+        let args = ["compare", "--config", c, "--out", o];
+        rejects(&args, needle, &out);
+        let err = String::from_utf8_lossy(&anisospec(&args).stderr).into_owned();
+        assert!(
+            !err.contains(" --") && !err.contains(" -n "),
+            "{needle}: '{err}' names a flag"
+        );
+    }
+}
+
+/// An analytic label that makes the same file name as a pixel's (known only once the oracle has
+/// picked the pixel) is refused before anything is measured or written.
+#[test]
+fn compare_rejects_a_label_clashing_with_a_pixel() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut study = CompareConfig {
+        pixel_classes: vec!["hairline".into()],
+        pixel_reference_count: 1 << 10,
+        ..CompareConfig::default_suite()
+    };
+    let pixel = anisospec::compare::subjects(&study, dir.path()).unwrap()[3]
+        .label
+        .clone();
+    study.analytic[0].label = pixel.replace(' ', "-").to_uppercase();
+    let config = dir.path().join("study.toml");
+    std::fs::write(&config, toml::to_string(&study).unwrap()).unwrap();
+    let out = dir.path().join("report");
+    rejects(
+        &[
+            "compare",
+            "--config",
+            config.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--cache",
+            dir.path().join("cache").to_str().unwrap(),
+        ],
+        &format!(
+            "'{}' and '{pixel}' both make the file name",
+            study.analytic[0].label
+        ),
+        &out,
+    );
+}
+
+/// A report folder (or a cache folder) that is, or lies under, an existing file is refused before
+/// any work, and the file is left as it was.
+#[test]
+fn compare_refuses_an_output_folder_that_is_a_file() {
+    let (dir, file) = tmp("taken");
+    std::fs::write(&file, "mine").unwrap();
+    let f = file.to_str().unwrap();
+    let under = file.join("report");
+    let report = dir.path().join("report");
+    let cases = [
+        (vec!["--out", f], "--out"),
+        (vec!["--out", under.to_str().unwrap()], "lies under"),
+        (
+            vec!["--out", report.to_str().unwrap(), "--cache", f],
+            "--cache",
+        ),
+    ];
+    for (flags, needle) in cases {
+        let mut args = vec!["compare"];
+        args.extend(&flags);
+        let o = anisospec(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains(needle) && err.contains("not a folder"),
+            "{args:?}: '{err}' lacks '{needle}'"
+        );
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
+        assert!(!report.exists());
+    }
+}

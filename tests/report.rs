@@ -628,3 +628,57 @@ fn compare_writes_a_consistent_report_and_reuses_its_cache() {
     // Every sampler at 64 and padded jittered at 16, on both integrands.
     assert_eq!(shared, 2 * (SAMPLERS.len() + 1));
 }
+
+/// A cached table whose file is unreadable is rebuilt, with a warning naming it, as the pixel
+/// references are: the run succeeds, the rebuilt file is the table the first run built, and the
+/// measurements are the same.
+#[test]
+fn compare_rebuilds_a_corrupted_cached_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let ns = [16, 64];
+    let first = compare(dir.path(), "first", &study(&ns), &cache);
+    let points = check_report(&first, &ns);
+    let table = files_under(&cache.join("tables"))
+        .into_iter()
+        .find(|f| f.extension().unwrap() == "npy")
+        .map(|f| cache.join("tables").join(f))
+        .expect("a cached table");
+    let built = std::fs::read(&table).unwrap();
+    std::fs::write(&table, b"not an npy file").unwrap();
+
+    let config = dir.path().join("second.toml");
+    std::fs::write(&config, study(&ns)).unwrap();
+    let second = dir.path().join("second");
+    let o = anisospec(&[
+        "compare",
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        second.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{:?}: {err}", o.status.code());
+    assert!(
+        err.contains("rebuilding") && err.contains(table.file_name().unwrap().to_str().unwrap()),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(&table).unwrap(),
+        built,
+        "the rebuilt table differs"
+    );
+    // The same numbers but the set-up times: the rebuilt table's is the rebuild's.
+    let untimed = |p: &[Point]| -> Vec<Point> {
+        measured(p)
+            .into_iter()
+            .map(|p| Point {
+                setup_seconds: 0.0,
+                ..p
+            })
+            .collect()
+    };
+    assert_eq!(untimed(&check_report(&second, &ns)), untimed(&points));
+}

@@ -6,6 +6,16 @@ use crate::points::shear::ShearMode;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+/// The largest `table_seconds`, a safety net of about 11 days per set.
+pub const MAX_TABLE_SECONDS: f64 = 1e6;
+
+/// The largest shear magnitude an analytic integrand may give: beyond it the transported shear loses
+/// precision.
+pub const MAX_SHEAR: f64 = 100.0;
+
+/// The shear range of the spectra gallery's sheared and optimized samplers (at shear 0.5).
+pub const GALLERY_SHEAR_RANGE: (f64, f64) = (0.3, 0.7);
+
 /// An analytic 4D integrand of the suite.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -150,7 +160,8 @@ impl CompareConfig {
         Ok(config)
     }
 
-    /// Checks sizes and names that would otherwise fail mid-run.
+    /// Checks, before any work, everything in the config that would otherwise fail mid-run, put a
+    /// number that is not one in the report, or make two outputs share a file name.
     pub fn validate(&self) -> Result<()> {
         if self.ns.len() < 2 || self.ns.contains(&0) {
             return Err(Error::Usage(
@@ -187,18 +198,54 @@ impl CompareConfig {
                 "ns lists N = {n} twice; give each size once, e.g. ns = [16, 64, 256]"
             )));
         }
-        for name in self.classical.iter().chain(&self.sheared) {
-            crate::samplers::build(name, 4)?;
+        if self.analytic.is_empty() && self.pixel_classes.is_empty() {
+            return Err(Error::Usage(
+                "analytic and pixel_classes are both empty, so there is nothing to integrate; add an [[analytic]] entry or a pixel class, e.g. pixel_classes = [\"hairline\"]".into(),
+            ));
         }
-        for path in &self.tables {
-            crate::targets::Target::load(path).map_err(|e| {
+        if let Some(c) = first_repeat(&self.pixel_classes) {
+            return Err(Error::Usage(format!(
+                "pixel_classes lists '{c}' twice; give each class once"
+            )));
+        }
+        if !self.pixel_classes.is_empty() {
+            crate::render::pixel::check_ref_count(self.pixel_reference_count).map_err(|e| {
                 Error::Usage(format!(
-                    "table target {}: {e}; give the path of a target file such as targets/double-wedge.toml (paths are relative to the folder compare runs in)",
-                    path.display()
+                    "pixel_reference_count = {}: {e}",
+                    self.pixel_reference_count
                 ))
             })?;
         }
+        for name in self.classical.iter().chain(&self.sheared) {
+            crate::samplers::build(name, 4)?;
+        }
+        for (key, list) in [("classical", &self.classical), ("sheared", &self.sheared)] {
+            if let Some(name) = first_repeat(list) {
+                return Err(Error::Usage(format!(
+                    "{key} lists '{name}' twice; give each sampler once"
+                )));
+            }
+        }
+        if let Some(mode) = first_repeat(&self.shear_modes) {
+            return Err(Error::Usage(format!(
+                "shear_modes lists '{}' twice; give each mode once",
+                format!("{mode:?}").to_lowercase()
+            )));
+        }
+        if !self.sheared.is_empty() && self.shear_modes.is_empty() {
+            return Err(Error::Usage(
+                "sheared lists samplers but shear_modes is empty, so none would run; give shear_modes = [\"transported\"] (or [\"transported\", \"wrap\"]), or sheared = []".into(),
+            ));
+        }
         for (i, e) in self.analytic.iter().enumerate() {
+            for (key, pair) in [("shear", e.shear), ("shear_range", e.shear_range)] {
+                if pair.iter().any(|s| !s.is_finite() || s.abs() > MAX_SHEAR) {
+                    return Err(Error::Usage(format!(
+                        "{}: {key} = [{}, {}]: shears must be finite and at most {MAX_SHEAR} in magnitude (a larger one loses precision in the transported shear), e.g. {key} = [0.5, 0.5]",
+                        e.label, pair[0], pair[1]
+                    )));
+                }
+            }
             if e.shear_range[0] > e.shear_range[1] {
                 return Err(Error::Usage(format!(
                     "{}: shear_range [{}, {}] has s_min > s_max",
@@ -229,6 +276,154 @@ impl CompareConfig {
                 )));
             }
         }
+        let labels: Vec<String> = self.analytic.iter().map(|e| e.label.clone()).collect();
+        check_file_names(&labels, "analytic integrand labels")?;
+        self.validate_spectra()?;
+        self.validate_tables()?;
+        self.validate_sampler_labels()
+    }
+
+    /// `table_seconds`, `table_sets`, and every table target at every N it is built for (`ns` and
+    /// `spectra_n`), for the analytic integrands' shear ranges and the gallery's.
+    fn validate_tables(&self) -> Result<()> {
+        if !(self.table_seconds.is_finite()
+            && self.table_seconds > 0.0
+            && self.table_seconds <= MAX_TABLE_SECONDS)
+        {
+            return Err(Error::Usage(format!(
+                "table_seconds = {} is not a time limit; give a finite number of seconds above 0 and at most {MAX_TABLE_SECONDS:e}, e.g. table_seconds = 600",
+                self.table_seconds
+            )));
+        }
+        if self.tables.is_empty() {
+            return Ok(());
+        }
+        if self.table_sets == 0 {
+            return Err(Error::Usage(
+                "table_sets = 0 builds tables of no set; give at least 1, e.g. table_sets = 16"
+                    .into(),
+            ));
+        }
+        let sizes = self
+            .ns
+            .iter()
+            .map(|&n| ("ns", n))
+            .chain([("spectra_n", self.spectra_n)]);
+        for (key, n) in sizes.clone() {
+            if n < 2 {
+                return Err(Error::Usage(format!(
+                    "{key} asks for N = {n}, but an optimized table (tables) needs at least 2 points; raise {key} to 2 or more, or set tables = []"
+                )));
+            }
+        }
+        let ranges: Vec<(f64, f64)> = self
+            .analytic
+            .iter()
+            .map(|e| (e.shear_range[0], e.shear_range[1]))
+            .chain([GALLERY_SHEAR_RANGE])
+            .collect();
+        for path in &self.tables {
+            let target = crate::targets::Target::load(path).map_err(|e| {
+                Error::Usage(format!(
+                    "table target {}: {e}; give the path of a target file such as targets/double-wedge.toml (paths are relative to the folder compare runs in)",
+                    path.display()
+                ))
+            })?;
+            for (key, n) in sizes.clone() {
+                for &range in &ranges {
+                    super::tables::check_buildable(target.clone(), range, n).map_err(|e| {
+                        Error::Usage(format!(
+                            "table target {} cannot be built at N = {n} (from {key}): {e}",
+                            path.display()
+                        ))
+                    })?;
+                }
+            }
+        }
+        for (i, a) in self.tables.iter().enumerate() {
+            if let Some(b) = self.tables[..i]
+                .iter()
+                .find(|b| b.file_stem() == a.file_stem())
+            {
+                return Err(Error::Usage(format!(
+                    "tables lists {} and {}, which share the file name stem, so both would be '{}' in the report; give each target once, or copy one to a file of another name",
+                    b.display(),
+                    a.display(),
+                    super::SamplerSpec::Table(a.clone()).label()
+                )));
+            }
+        }
         Ok(())
     }
+
+    /// At least one sampler, and sampler labels that are distinct, safe in CSV and markdown, and
+    /// distinct as file names.
+    fn validate_sampler_labels(&self) -> Result<()> {
+        let labels: Vec<String> = super::sampler_specs(self)
+            .iter()
+            .map(super::SamplerSpec::label)
+            .collect();
+        if labels.is_empty() {
+            return Err(Error::Usage(
+                "classical, sheared and tables are all empty, so there is no sampler to compare; list at least one, e.g. classical = [\"sobol\"]".into(),
+            ));
+        }
+        if let Some(l) = labels.iter().find(|l| l.contains(['"', '|', '\n', '\r'])) {
+            return Err(Error::Usage(format!(
+                "sampler {l:?}: a sampler's name (or a table target's file stem) must hold no '\"', '|' or line break (it goes into CSV and markdown tables)"
+            )));
+        }
+        check_file_names(&labels, "samplers")
+    }
+
+    /// The spectra gallery's size, grid side and realizations.
+    fn validate_spectra(&self) -> Result<()> {
+        if self.spectra_n == 0 {
+            return Err(Error::Usage(
+                "spectra_n = 0 asks for no points; give at least 1, e.g. spectra_n = 256".into(),
+            ));
+        }
+        if self.spectra_res == 0 || self.spectra_res % 2 == 1 {
+            return Err(Error::Usage(format!(
+                "spectra_res = {} is not a positive even number; the frequency grid k = -K/2..K/2-1 needs K even, e.g. spectra_res = {}",
+                self.spectra_res,
+                (self.spectra_res + 1).max(2) / 2 * 2
+            )));
+        }
+        if self.spectra_realizations == 0 {
+            return Err(Error::Usage(
+                "spectra_realizations = 0 averages nothing; give at least 1, e.g. spectra_realizations = 32".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The first item of `list` that appears in it again.
+fn first_repeat<T: PartialEq>(list: &[T]) -> Option<&T> {
+    list.iter()
+        .enumerate()
+        .find(|&(i, x)| list[..i].contains(x))
+        .map(|(_, x)| x)
+}
+
+/// Refuses two of `labels` (`what`, e.g. `samplers`) that are equal or that make the same file name
+/// in the report (which keeps only letters and digits: `edge a` and `edge-a` are both `edge_a`),
+/// naming both.
+pub fn check_file_names(labels: &[String], what: &str) -> Result<()> {
+    for (i, a) in labels.iter().enumerate() {
+        let slug = super::report::slug(a);
+        if let Some(b) = labels[..i].iter().find(|b| super::report::slug(b) == slug) {
+            return Err(if a == b {
+                Error::Usage(format!(
+                    "{what}: '{a}' appears twice; the report names rows and files after it, so give each once"
+                ))
+            } else {
+                Error::Usage(format!(
+                    "{what}: '{b}' and '{a}' both make the file name '{slug}' in the report (which keeps only letters and digits); make them differ in a letter or digit"
+                ))
+            });
+        }
+    }
+    Ok(())
 }

@@ -246,11 +246,16 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
     Ok(out)
 }
 
-/// Runs the study and writes the report folder `out`.
+/// Runs the study and writes the report folder `out`. A bad config, or an `out` or `cache_dir` that
+/// is (or lies under) a file, is refused before any work.
 pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outcome> {
     config.validate()?;
+    check_folder(out, "--out", "report")?;
+    check_folder(cache_dir, "--cache", "cache")?;
     let started = Instant::now();
     let subjects = subjects(config, cache_dir)?;
+    let labels: Vec<String> = subjects.iter().map(|s| s.label.clone()).collect();
+    config::check_file_names(&labels, "integrands (analytic labels and pixels)")?;
     let specs = sampler_specs(config);
     let tables = tables::TableCache::new(config, cache_dir);
     let cfg = ConvergeConfig {
@@ -301,6 +306,24 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
     };
     report::write(&outcome, &specs, &tables, out)?;
     Ok(outcome)
+}
+
+/// Refuses a folder `dir` (given by `flag`, holding the `what`) that is, or lies under, an existing
+/// file, before any work: the run could not write to it.
+fn check_folder(dir: &Path, flag: &str, what: &str) -> Result<()> {
+    match dir.ancestors().find(|a| a.exists()) {
+        Some(file) if !file.is_dir() => {
+            let place = if file == dir {
+                format!("{} is a file", dir.display())
+            } else {
+                format!("{} lies under {}, a file", dir.display(), file.display())
+            };
+            Err(Error::Usage(format!(
+                "{flag} {place}, not a folder, so no {what} folder can be written there; give {flag} a folder path"
+            )))
+        }
+        _ => Ok(()),
+    }
 }
 
 /// The samplers that follow the oracle (sheared and optimized), on the subjects that have a shear,

@@ -1,7 +1,7 @@
 //! The compare report folder: `report.md` with tables, convergence and speed-against-error plots, a
 //! spectra gallery per sampler, and CSV / npy of every number.
 
-use super::config::CompareConfig;
+use super::config::{CompareConfig, GALLERY_SHEAR_RANGE};
 use super::tables::{frame_shear, table_frame, TableCache, TABLE_ITERATIONS};
 use super::{instantiate, usable_n, Outcome, SamplerSpec, Study, SubjectInfo};
 use crate::converge::{plot, Convergence};
@@ -235,7 +235,7 @@ fn write_gallery(
     ];
     let mut written = Vec::new();
     for spec in specs {
-        let (sampler, _) = instantiate(spec, (0.5, 0.5), (0.3, 0.7), c.spectra_n, tables)?;
+        let (sampler, _) = instantiate(spec, (0.5, 0.5), GALLERY_SHEAR_RANGE, c.spectra_n, tables)?;
         let n = usable_n(sampler.as_ref(), c.spectra_n);
         let spectra = projections
             .iter()

@@ -8,7 +8,7 @@
 //! wraps across the pixel boundary (the seam that defeats the wrap-around shear, DESIGN §5).
 
 use super::config::CompareConfig;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::optimize::solver::TIME_LIMIT_STOP;
 use crate::optimize::{
     optimize_sets, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT, DEFAULT_REPULSION,
@@ -138,8 +138,7 @@ impl TableCache {
         n: usize,
     ) -> Result<(Box<dyn Sampler>, f64)> {
         let framed = within_reach(table_frame(Target::load(target)?, range), n)?;
-        let (path, seconds) = self.table(target, &framed, n)?;
-        let table = Table::load(&path.to_string_lossy(), 4)?;
+        let (table, seconds) = self.table(target, &framed, n)?;
         let shear = if frame_shear(range) == 0.0 {
             (0.0, 0.0)
         } else {
@@ -149,8 +148,9 @@ impl TableCache {
         Ok((Box::new(sampler), seconds))
     }
 
-    /// The cached table's file, optimized and written first if missing, and its optimization time.
-    fn table(&self, source: &Path, target: &Target, n: usize) -> Result<(PathBuf, f64)> {
+    /// The cached table, optimized and written first if missing or unreadable, and its optimization
+    /// time. An unreadable cache file is rebuilt, with a warning, as the pixel references are.
+    fn table(&self, source: &Path, target: &Target, n: usize) -> Result<(Table, f64)> {
         let key = format!(
             "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|annular={DEFAULT_ANNULAR_WEIGHT}|centred|start={}|v7",
             self.sets, self.seed, start_sampler(n)
@@ -165,28 +165,14 @@ impl TableCache {
         if let (true, Ok(text)) = (path.is_file(), std::fs::read_to_string(&meta)) {
             if let Ok(m) = serde_json::from_str::<serde_json::Value>(&text) {
                 if m["key"] == key {
-                    return Ok((path, m["seconds"].as_f64().unwrap_or(0.0)));
+                    match load_table(&path, n) {
+                        Ok(table) => return Ok((table, m["seconds"].as_f64().unwrap_or(0.0))),
+                        Err(e) => eprintln!("warning: rebuilding an unreadable cached table: {e}"),
+                    }
                 }
             }
         }
-        let setup = Setup {
-            target: target.clone(),
-            n,
-            dims: 4,
-            strata: Strata::default(),
-            repulsion: DEFAULT_REPULSION,
-            method: Method::Nufft { eps: 1e-8 },
-            limits: Limits {
-                max_iters: TABLE_ITERATIONS,
-                max_seconds: self.seconds,
-                tol: 1e-6,
-            },
-            // x and y are held where the start puts them (Latin): a Sobol or PMJ02 start keeps its
-            // (0,2)-net in xy, what a pixel seen through the oracle's shear depends on most.
-            init: Some(start_sampler(n).to_string()),
-            latin: true,
-            annular_weight: DEFAULT_ANNULAR_WEIGHT,
-        };
+        let setup = table_setup(target.clone(), n, self.seconds);
         let started = std::time::Instant::now();
         let (points, reports) = optimize_sets(&setup, self.sets, self.seed, &|_| {})?;
         let seconds = started.elapsed().as_secs_f64();
@@ -213,8 +199,51 @@ impl TableCache {
             use std::io::Write;
             writeln!(w, "{sidecar:#}")
         })?;
-        Ok((path, seconds))
+        Ok((load_table(&path, n)?, seconds))
     }
+}
+
+/// What a table of `target` at `n` points is optimized with, stopping after `seconds` per set at
+/// the latest.
+fn table_setup(target: Target, n: usize, seconds: f64) -> Setup {
+    Setup {
+        target,
+        n,
+        dims: 4,
+        strata: Strata::default(),
+        repulsion: DEFAULT_REPULSION,
+        method: Method::Nufft { eps: 1e-8 },
+        limits: Limits {
+            max_iters: TABLE_ITERATIONS,
+            max_seconds: seconds,
+            tol: 1e-6,
+        },
+        // x and y are held where the start puts them (Latin): a Sobol or PMJ02 start keeps its
+        // (0,2)-net in xy, what a pixel seen through the oracle's shear depends on most.
+        init: Some(start_sampler(n).to_string()),
+        latin: true,
+        annular_weight: DEFAULT_ANNULAR_WEIGHT,
+    }
+}
+
+/// The table file `path`, which must hold sets of `n` 4D points.
+fn load_table(path: &Path, n: usize) -> Result<Table> {
+    let table = Table::load(&path.to_string_lossy(), 4)?;
+    match table.check_n(n) {
+        Ok(()) => Ok(table),
+        Err(m) => Err(Error::Input(format!(
+            "{} holds sets of {m} points, not {n}",
+            path.display()
+        ))),
+    }
+}
+
+/// Checks, without optimizing, that a table of `target` can be built at `n` points for a subject
+/// whose shears span `range`: the error [`TableCache::sampler`] would meet before its first iteration.
+pub fn check_buildable(target: Target, range: (f64, f64), n: usize) -> Result<()> {
+    let framed = within_reach(table_frame(target, range), n)?;
+    table_setup(framed, n, 1.0).objective()?;
+    crate::samplers::validate_n(crate::samplers::build(start_sampler(n), 4)?.as_ref(), n)
 }
 
 #[cfg(test)]

@@ -716,8 +716,13 @@ fn compare_rejects_bad_numbers_and_clashing_names_before_any_work() {
             "shear_range = [NaN, NaN]",
         ),
         (
-            |c| c.analytic[1].shear_range = [0.3, 1e3],
-            "at most 100 in magnitude",
+            |c| c.analytic[1].shear_range = [0.3, 1e7],
+            "at most 1e6 in magnitude",
+        ),
+        (|c| c.oracle_errors = vec![0.1, 1e3], "at most 100"),
+        (
+            |c| c.analytic[0].shear = [9e5, 0.5],
+            "above the largest shear",
         ),
         (|c| c.spectra_res = 7, "spectra_res = 7"),
         (|c| c.spectra_res = 0, "spectra_res = 0"),

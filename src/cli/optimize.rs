@@ -101,6 +101,7 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
             args.n
         )));
     }
+    crate::points::coordinate_count(args.sets, args.n, args.dims).map_err(Error::Usage)?;
     if !(args.max_seconds.is_finite() && args.max_seconds > 0.0 && args.max_seconds <= MAX_SECONDS)
     {
         return Err(Error::Usage(format!(

@@ -2,16 +2,15 @@
 //! (a small default and a paper-scale `--full`) or a strict TOML file.
 
 use crate::error::{Error, Result};
-use crate::points::shear::ShearMode;
+use crate::points::shear::{ShearMode, MAX_SHEAR};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// The largest `table_seconds`, a safety net of about 11 days per set.
 pub const MAX_TABLE_SECONDS: f64 = 1e6;
 
-/// The largest shear magnitude an analytic integrand may give: beyond it the transported shear loses
-/// precision.
-pub const MAX_SHEAR: f64 = 100.0;
+/// The largest relative oracle error of the robustness study (+10000 %).
+pub const MAX_ORACLE_ERROR: f64 = 100.0;
 
 /// The shear range of the spectra gallery's sheared and optimized samplers (at shear 0.5).
 pub const GALLERY_SHEAR_RANGE: (f64, f64) = (0.3, 0.7);
@@ -183,11 +182,11 @@ impl CompareConfig {
         if self
             .oracle_errors
             .iter()
-            .any(|e| !e.is_finite() || *e <= -1.0)
+            .any(|e| !(*e > -1.0 && *e <= MAX_ORACLE_ERROR))
         {
-            return Err(Error::Usage(
-                "oracle_errors are relative errors of the shear, finite and above -1 (e.g. -0.25, 0.1)".into(),
-            ));
+            return Err(Error::Usage(format!(
+                "oracle_errors are relative errors of the shear, above -1 and at most {MAX_ORACLE_ERROR} (e.g. -0.25, 0.1)"
+            )));
         }
         if let Some(n) = self
             .ns
@@ -241,10 +240,21 @@ impl CompareConfig {
             for (key, pair) in [("shear", e.shear), ("shear_range", e.shear_range)] {
                 if pair.iter().any(|s| !s.is_finite() || s.abs() > MAX_SHEAR) {
                     return Err(Error::Usage(format!(
-                        "{}: {key} = [{}, {}]: shears must be finite and at most {MAX_SHEAR} in magnitude (a larger one loses precision in the transported shear), e.g. {key} = [0.5, 0.5]",
+                        "{}: {key} = [{}, {}]: shears must be finite and at most {MAX_SHEAR:e} in magnitude (a larger one loses precision in the transported shear), e.g. {key} = [0.5, 0.5]",
                         e.label, pair[0], pair[1]
                     )));
                 }
+            }
+            let largest = e.shear[0].abs().max(e.shear[1].abs());
+            if let Some(err) = self
+                .oracle_errors
+                .iter()
+                .find(|&&err| largest * (1.0 + err) > MAX_SHEAR)
+            {
+                return Err(Error::Usage(format!(
+                    "{}: shear {largest} with the oracle error {err} is above the largest shear, {MAX_SHEAR:e}; lower oracle_errors or the shear",
+                    e.label
+                )));
             }
             if e.shear_range[0] > e.shear_range[1] {
                 return Err(Error::Usage(format!(

@@ -8,7 +8,8 @@ use std::path::PathBuf;
 /// Measure MSE(N) over independent, randomly shifted realizations, and fit the convergence slope.
 #[derive(Clone, Debug, clap::Args)]
 pub struct ConvergeArgs {
-    /// Samplers, comma-separated (see `anisospec samplers`), e.g. random,jittered,nrooks or table:PATH (optimized sets).
+    /// Samplers, comma-separated (see `anisospec samplers`), e.g. random,jittered,nrooks or
+    /// table:PATH (optimized sets).
     #[arg(long, value_delimiter = ',', required = true)]
     pub sampler: Vec<String>,
     /// Integrand, NAME:key=value,... (see `anisospec integrands`), e.g. disc:r=0.3.

@@ -11,7 +11,8 @@ use std::path::PathBuf;
 /// Draw point sets from a sampler.
 #[derive(Debug, clap::Args)]
 pub struct SampleArgs {
-    /// Sampler name (see `anisospec samplers`), e.g. mj, sobol, padded-cmj, oa, or table:PATH (optimized sets).
+    /// Sampler name (see `anisospec samplers`), e.g. mj, sobol, padded-cmj, oa, or table:PATH
+    /// (optimized sets).
     #[arg(long)]
     pub sampler: String,
     /// Dimensions of each point: 2 (x,y) or 4 (x,y,u,v).

@@ -17,7 +17,8 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, clap::Args)]
 #[command(group = clap::ArgGroup::new("source").required(true).args(["sampler", "input"]))]
 pub struct SpectrumArgs {
-    /// Sampler to draw the realizations from (see `anisospec samplers`), or table:PATH (optimized sets).
+    /// Sampler to draw the realizations from (see `anisospec samplers`), or table:PATH (optimized
+    /// sets).
     #[arg(long)]
     pub sampler: Option<String>,
     /// Point file (.npy [sets, N, D] or .txt): each set is one realization.
@@ -82,20 +83,15 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
     } else {
         Method::nufft(args.eps)?
     };
-    for (extra, flag, ext) in [
-        (&args.radial, "--radial", "csv"),
-        (&args.stderr, "--stderr", "npy"),
+    for (extra, flag, ext, what) in [
+        (&args.radial, "--radial", "csv", "a CSV table"),
+        (&args.stderr, "--stderr", "npy", "an npy array"),
     ] {
         if let Some(path) = extra {
             if path.extension().and_then(|e| e.to_str()) != Some(ext) {
                 return Err(Error::Usage(format!(
-                    "{flag} {}: name it .{ext} ({flag} writes {})",
-                    path.display(),
-                    if ext == "csv" {
-                        "a CSV table"
-                    } else {
-                        "an npy array"
-                    }
+                    "{flag} {}: name it .{ext} ({flag} writes {what})",
+                    path.display()
                 )));
             }
         }

@@ -53,7 +53,8 @@ pub struct PointSets {
 
 impl PointSets {
     /// Checks shape and values: `dims` is 2 or 4, at least one set of at least one point, at most
-    /// [`MAX_COORDINATES`] coordinates, as many as the shape needs, every coordinate finite and in `[0, 1]`; a coordinate equal to 1 is the torus point 0 and is stored so.
+    /// [`MAX_COORDINATES`] coordinates, as many as the shape needs, every coordinate finite and in
+    /// `[0, 1]`; a coordinate equal to 1 is the torus point 0 and is stored so.
     pub fn new(sets: usize, n: usize, dims: usize, mut data: Vec<f64>) -> Result<Self> {
         if dims != 2 && dims != 4 {
             return Err(Error::Input(format!(

@@ -356,6 +356,7 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
         header.extend(ns.iter().map(|n| format!("MSE at N={n}")));
         header.extend([
             "slope [95% CI]".to_string(),
+            "local slope".to_string(),
             format!("ms/estimate at N={}", ns[last]),
             format!("set-up s at N={}", ns[last]),
             format!("gain over best classical at N={}", ns[last]),
@@ -378,8 +379,19 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             }
             let [slope, lo, hi] = study[0].slope;
             let p = &study[last];
+            // The local slope: between the two largest N the sampler made.
+            let mut made: Vec<_> = study.iter().map(|p| (p.n, p.mse)).collect();
+            made.sort_by_key(|&(n, _)| n);
+            made.dedup_by_key(|&mut (n, _)| n);
+            let local = match made[..] {
+                [.., (na, a), (nb, b)] => {
+                    format!("{:.2}", (b / a).ln() / (nb as f64 / na as f64).ln())
+                }
+                _ => "—".into(),
+            };
             expect.extend([
                 format!("{slope:.2} [{lo:.2}, {hi:.2}]"),
+                local,
                 format!("{:.3}", p.seconds_per_estimate * 1e3),
                 format!("{:.2}", p.setup_seconds),
                 format!("{:.2}×", best_classical(subject, last) / p.mse),

@@ -311,8 +311,8 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
 /// Refuses a folder `dir` (given by `flag`, holding the `what`) that is, or lies under, an existing
 /// file, before any work: the run could not write to it.
 fn check_folder(dir: &Path, flag: &str, what: &str) -> Result<()> {
-    match dir.ancestors().find(|a| a.exists()) {
-        Some(file) if !file.is_dir() => {
+    match crate::output::file_in_the_way(dir) {
+        Some(file) => {
             let place = if file == dir {
                 format!("{} is a file", dir.display())
             } else {
@@ -322,7 +322,7 @@ fn check_folder(dir: &Path, flag: &str, what: &str) -> Result<()> {
                 "{flag} {place}, not a folder, so no {what} folder can be written there; give {flag} a folder path"
             )))
         }
-        _ => Ok(()),
+        None => Ok(()),
     }
 }
 

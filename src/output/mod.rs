@@ -96,7 +96,7 @@ pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<()> {
                 out.display()
             )));
         }
-        if let Some(blocker) = out.ancestors().skip(1).find(|a| a.exists() && !a.is_dir()) {
+        if let Some(blocker) = out.parent().and_then(file_in_the_way) {
             return Err(Error::Usage(format!(
                 "cannot write {}: {} is a file, not a folder; choose another output path",
                 out.display(),
@@ -105,6 +105,12 @@ pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The existing file, if any, that stands where the folder `dir` (or one of its ancestors) must go: the
+/// nearest ancestor that exists, when it is not a folder.
+pub fn file_in_the_way(dir: &Path) -> Option<&Path> {
+    dir.ancestors().find(|a| a.exists()).filter(|a| !a.is_dir())
 }
 
 /// Whether two paths name the same file: the same absolute path, or the same file once links are

@@ -726,6 +726,10 @@ fn compare_rejects_bad_numbers_and_clashing_names_before_any_work() {
         ),
         (|c| c.spectra_res = 7, "spectra_res = 7"),
         (|c| c.spectra_res = 0, "spectra_res = 0"),
+        (
+            |c| c.spectra_res = 100_000,
+            "spectra_res = 100000 is above the largest grid",
+        ),
         (|c| c.spectra_n = 0, "spectra_n = 0"),
         (|c| c.spectra_realizations = 0, "spectra_realizations = 0"),
         (

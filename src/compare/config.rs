@@ -188,11 +188,7 @@ impl CompareConfig {
                 "oracle_errors are relative errors of the shear, above -1 and at most {MAX_ORACLE_ERROR} (e.g. -0.25, 0.1)"
             )));
         }
-        if let Some(n) = self
-            .ns
-            .iter()
-            .find(|&n| self.ns.iter().filter(|&m| m == n).count() > 1)
-        {
+        if let Some(n) = first_repeat(&self.ns) {
             return Err(Error::Usage(format!(
                 "ns lists N = {n} twice; give each size once, e.g. ns = [16, 64, 256]"
             )));
@@ -393,13 +389,7 @@ impl CompareConfig {
                 "spectra_n = 0 asks for no points; give at least 1, e.g. spectra_n = 256".into(),
             ));
         }
-        if self.spectra_res == 0 || self.spectra_res % 2 == 1 {
-            return Err(Error::Usage(format!(
-                "spectra_res = {} is not a positive even number; the frequency grid k = -K/2..K/2-1 needs K even, e.g. spectra_res = {}",
-                self.spectra_res,
-                (self.spectra_res + 1).max(2) / 2 * 2
-            )));
-        }
+        crate::spectrum::check_res_named("spectra_res =", self.spectra_res)?;
         if self.spectra_realizations == 0 {
             return Err(Error::Usage(
                 "spectra_realizations = 0 averages nothing; give at least 1, e.g. spectra_realizations = 32".into(),

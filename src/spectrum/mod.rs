@@ -70,17 +70,23 @@ fn plan_or_panic(res: usize, eps: f64) -> Arc<Nufft2d> {
 /// hold a few of them.
 pub const MAX_RES: usize = 8192;
 
-/// Checks a spectrum resolution `K`: even, positive and at most [`MAX_RES`].
+/// Checks a spectrum resolution `K` given as `--res`: even, positive and at most [`MAX_RES`].
 pub fn check_res(res: usize) -> Result<()> {
+    check_res_named("--res", res)
+}
+
+/// [`check_res`] for a resolution set by `name`, e.g. `--res` or `spectra_res =` (a config key): the
+/// message writes `{name} {res}`.
+pub fn check_res_named(name: &str, res: usize) -> Result<()> {
     if res == 0 || res % 2 == 1 {
         return Err(Error::Usage(format!(
-            "--res {res} is not a positive even number; the frequency grid k = -K/2..K/2-1 needs K even, e.g. --res {}",
+            "{name} {res} is not a positive even number; the frequency grid k = -K/2..K/2-1 needs K even, e.g. {name} {}",
             (res.min(MAX_RES) + 1).max(2) / 2 * 2
         )));
     }
     if res > MAX_RES {
         return Err(Error::Usage(format!(
-            "--res {res} is above the largest grid, {MAX_RES} (a {res} x {res} grid needs {:.1} GiB per array); lower --res",
+            "{name} {res} is above the largest grid, {MAX_RES} (a {res} x {res} grid needs {:.1} GiB per array); lower it",
             (res as f64).powi(2) * 8.0 / (1u64 << 30) as f64
         )));
     }

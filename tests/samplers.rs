@@ -534,3 +534,36 @@ fn every_sampler_handles_its_smallest_sets() {
         }
     }
 }
+
+/// The rank-1 lattice is an N-rooks set, and a shifted lattice's power spectrum is exactly `N` on its
+/// dual lattice `k1 + g k2 ≡ 0 (mod N)` and 0 elsewhere (exact DFT, within rounding), for a power of two
+/// and for an N with odd factors; `xuyv-lattice` carries the lattice into `xu`.
+#[test]
+fn lattice_is_nrooks_with_its_spectrum_on_the_dual_lattice() {
+    use anisospec::samplers::lattice::generator;
+    use anisospec::spectrum::{power, Method};
+    let res = 64;
+    for (n, seed) in [(256usize, 3u64), (250, 4), (1021, 5)] {
+        let g = generator(n) as i64;
+        let set = one_set("lattice", 2, n, seed);
+        let pts = proj(&set, 2, 0, 1);
+        assert!(nrooks(&pts), "lattice N={n} not N-rooks");
+        let xy: Vec<[f64; 2]> = pts.iter().map(|&(x, y)| [x, y]).collect();
+        let p = power(&xy, res, Method::Exact);
+        let half = res as i64 / 2;
+        for (idx, &v) in p.iter().enumerate() {
+            let (k2, k1) = (
+                idx as i64 / res as i64 - half,
+                idx as i64 % res as i64 - half,
+            );
+            let on_dual = (k1 + g * k2).rem_euclid(n as i64) == 0;
+            let expected = if on_dual { n as f64 } else { 0.0 };
+            assert!(
+                (v - expected).abs() < 1e-9 * n as f64,
+                "N={n} g={g} k=({k1},{k2}): P = {v}, expected {expected}"
+            );
+        }
+    }
+    let set = one_set("xuyv-lattice", 4, 256, 6);
+    assert!(nrooks(&proj(&set, 4, 0, 2)) && nrooks(&proj(&set, 4, 1, 3)));
+}

@@ -7,6 +7,7 @@
 pub mod compose;
 pub mod disk;
 pub mod grid;
+pub mod lattice;
 pub mod lowdisc;
 pub mod oa;
 pub mod pmj;
@@ -111,8 +112,9 @@ pub struct SamplerInfo {
 }
 
 /// Names of the 2D samplers (each also usable as `padded-NAME` and `xuyv-NAME` in 4D).
-pub const NAMES_2D: [&str; 10] = [
+pub const NAMES_2D: [&str; 11] = [
     "random", "jittered", "nrooks", "mj", "cmj", "pmj02", "poisson", "blue", "halton", "sobol",
+    "lattice",
 ];
 
 /// Names of the native 4D samplers.
@@ -137,6 +139,7 @@ pub fn catalog() -> Vec<SamplerInfo> {
         e("blue", &[2], "blue noise: 20 Lloyd iterations on the torus (32 probes per point)", "any N"),
         e("halton", &[2, 4], "Halton, bases 2,3 (2D) or 2,3,5,7 (4D), random digit permutations", "any N"),
         e("sobol", &[2, 4], "Owen-scrambled Sobol (Burley 2020), f32 resolution", "any N <= 65536"),
+        e("lattice", &[2], "rank-1 lattice (Korobov) (i/N, g i/N mod 1), g with the longest shortest dual vector, randomly shifted", "any N <= 2^20"),
         e("oa", &[4], "orthogonal-array sampling, Bose OA(p^2, p+1, p, 2): 2D projections p x p, 1D N-stratified", "N = p^2, p an odd prime"),
         e("padded-NAME", &[4], "Cook padding: 2D sets of NAME in xy and uv joined by a random permutation", "the N that NAME allows"),
         e("xuyv-NAME", &[4], "2D sets of NAME in xu and yv joined by a random permutation", "the N that NAME allows"),
@@ -156,6 +159,7 @@ fn build_2d(name: &str) -> Option<Box<dyn Sampler>> {
         "blue" => Box::new(disk::Blue),
         "halton" => Box::new(lowdisc::Halton { dims: 2 }),
         "sobol" => Box::new(lowdisc::Sobol { dims: 2 }),
+        "lattice" => Box::new(lattice::Lattice),
         _ => return None,
     })
 }

@@ -85,10 +85,11 @@ impl CompareConfig {
                 "sobol",
                 "padded-pmj02",
                 "oa",
+                "padded-lattice",
             ]
             .map(String::from)
             .to_vec(),
-            sheared: vec!["padded-mj".into(), "sobol".into()],
+            sheared: vec!["padded-mj".into(), "sobol".into(), "xuyv-lattice".into()],
             shear_modes: vec![ShearMode::Transported, ShearMode::Wrap],
             tables: vec![
                 PathBuf::from("targets/hairline.toml"),

@@ -53,7 +53,13 @@ fn z_below(a: &ConvergePoint, b: &ConvergePoint) -> f64 {
     (b.mse - a.mse) / (a.mse_stderr.powi(2) + b.mse_stderr.powi(2)).sqrt()
 }
 
-const CLASSICAL: [&str; 4] = ["padded-jittered", "padded-mj", "sobol", "padded-pmj02"];
+const CLASSICAL: [&str; 5] = [
+    "padded-jittered",
+    "padded-mj",
+    "sobol",
+    "padded-pmj02",
+    "padded-lattice",
+];
 
 /// On a single-depth (hairline) pixel, oracle-sheared padded MJ beats every classical sampler by more
 /// than 3 combined standard errors at N = 256; the wrap-around shear does not.

@@ -33,7 +33,7 @@ pub enum LegendCorner {
 }
 
 /// Twelve colours that stay apart from one another (Tableau 10, then black and dark gold), used in
-/// order and then again.
+/// order and then again with hollow markers.
 pub const PALETTE: [(u8, u8, u8); 12] = [
     (31, 119, 180),
     (255, 127, 14),
@@ -165,8 +165,15 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
             .draw()
             .map_err(|e| plot_error(path, e))?;
         for (i, s) in plot.series.iter().enumerate() {
-            let (r, g, b) = PALETTE[s.colour.unwrap_or(i) % PALETTE.len()];
+            let slot = s.colour.unwrap_or(i);
+            let (r, g, b) = PALETTE[slot % PALETTE.len()];
             let colour = RGBColor(r, g, b).to_rgba();
+            // Past the palette, colours come round again with hollow markers.
+            let marker = if (slot / PALETTE.len()).is_multiple_of(2) {
+                colour.filled()
+            } else {
+                colour.stroke_width(2)
+            };
             let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(keep).collect();
             let style = colour.stroke_width(2);
             if s.dashed {
@@ -183,10 +190,12 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
                     .map_err(|e| plot_error(path, e))?
                     .label(&s.label)
                     .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                        EmptyElement::at((x, y))
+                            + PathElement::new(vec![(0, 0), (20, 0)], colour.stroke_width(2))
+                            + Circle::new((10, 0), 4, marker)
                     });
                 chart
-                    .draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled())))
+                    .draw_series(pts.iter().map(|&p| Circle::new(p, 4, marker)))
                     .map_err(|e| plot_error(path, e))?;
             }
             if let Some(errs) = &s.errors {

@@ -537,14 +537,15 @@ fn every_sampler_handles_its_smallest_sets() {
 
 /// The rank-1 lattice is an N-rooks set, and a shifted lattice's power spectrum is exactly `N` on its
 /// dual lattice `k1 + g k2 ≡ 0 (mod N)` and 0 elsewhere (exact DFT, within rounding), for a power of two
-/// and for an N with odd factors; `xuyv-lattice` carries the lattice into `xu`.
+/// and for an N with odd factors; `xuyv-lattice` carries the lattice into `xu`; in 4D every 2D
+/// projection `(i, j)` has the spectrum of the 2D lattice `(z_i, z_j)`.
 #[test]
 fn lattice_is_nrooks_with_its_spectrum_on_the_dual_lattice() {
-    use anisospec::samplers::lattice::generator;
+    use anisospec::samplers::lattice::generating_vector;
     use anisospec::spectrum::{power, Method};
     let res = 64;
     for (n, seed) in [(256usize, 3u64), (250, 4), (1021, 5)] {
-        let g = generator(n) as i64;
+        let g = generating_vector(n, 2)[1] as i64;
         let set = one_set("lattice", 2, n, seed);
         let pts = proj(&set, 2, 0, 1);
         assert!(nrooks(&pts), "lattice N={n} not N-rooks");
@@ -566,4 +567,24 @@ fn lattice_is_nrooks_with_its_spectrum_on_the_dual_lattice() {
     }
     let set = one_set("xuyv-lattice", 4, 256, 6);
     assert!(nrooks(&proj(&set, 4, 0, 2)) && nrooks(&proj(&set, 4, 1, 3)));
+    // 4D (Korobov): every 2D projection (i, j) is the lattice of (z_i, z_j).
+    for (n, seed) in [(256usize, 7u64), (243, 8)] {
+        let z: Vec<i64> = generating_vector(n, 4).iter().map(|&c| c as i64).collect();
+        let set = one_set("lattice", 4, n, seed);
+        for (a, b) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+            let pts = proj(&set, 4, a, b);
+            assert!(nrooks(&pts), "4D lattice N={n} ({a},{b}) not N-rooks");
+            let xy: Vec<[f64; 2]> = pts.iter().map(|&(x, y)| [x, y]).collect();
+            let p = power(&xy, 32, Method::Exact);
+            for (idx, &v) in p.iter().enumerate() {
+                let (k2, k1) = (idx as i64 / 32 - 16, idx as i64 % 32 - 16);
+                let on_dual = (k1 * z[a] + k2 * z[b]).rem_euclid(n as i64) == 0;
+                let expected = if on_dual { n as f64 } else { 0.0 };
+                assert!(
+                    (v - expected).abs() < 1e-9 * n as f64,
+                    "4D N={n} ({a},{b}) k=({k1},{k2}): P = {v}, expected {expected}"
+                );
+            }
+        }
+    }
 }

@@ -1,13 +1,16 @@
 //! Randomly shifted rank-1 lattices (Korobov 1959; in rendering, Dammertz & Keller 2008): the `N`
-//! points `(i / N, frac(g i / N))`, `i = 0 … N−1`, moved together by one uniform toroidal shift
-//! (Cranley–Patterson rotation).
+//! points `frac(i z / N)`, `i = 0 … N−1`, for a generating vector `z` with `z_0 = 1`, moved together by
+//! one uniform toroidal shift (Cranley–Patterson rotation).
 //!
 //! The shift leaves `|F(k)|` unchanged, so every set has the same power spectrum: `P(k) = N` on the
-//! dual lattice `{k : k1 + g k2 ≡ 0 (mod N)}` and exactly 0 everywhere else. With `g` coprime to `N`
-//! both coordinates are permutations of the `N` strata (an N-rooks set), so the dual lattice meets the
-//! axes only at multiples of `N`. The generator `g` is the classical choice: the one whose dual lattice
-//! has the longest shortest nonzero vector (the largest dark disc around `k = 0`), the smallest such
-//! `g` on ties.
+//! dual lattice `{k : k·z ≡ 0 (mod N)}` and exactly 0 everywhere else. With every `z_d` coprime to `N`
+//! each coordinate is a permutation of the `N` strata (an N-rooks set), so the dual lattice meets the
+//! axes only at multiples of `N`. The generators are the classical choices (the smallest on ties):
+//! - 2D, `z = (1, g)`: the `g` whose dual lattice has the longest shortest nonzero vector (the largest
+//!   dark disc around `k = 0`);
+//! - 4D, Korobov's `z = (1, a, a², a³)` in `(x, y, u, v)`: the `a` whose six 2D projections have the
+//!   longest shortest dual vector at their worst (each projection `(z_i, z_j)` is the 2D lattice
+//!   `(1, z_j / z_i mod N)`).
 
 use super::Sampler;
 use crate::rng::Rng;
@@ -48,44 +51,86 @@ fn gcd(mut a: usize, mut b: usize) -> usize {
     a
 }
 
-/// The searched generator for `n` points (uncached): among `g ≤ n / 2` coprime to `n`, the one with
-/// the longest shortest dual vector, the smallest on ties (`g` and `n − g` are mirror images). 1 for
-/// `n ≤ 2`.
-fn search_generator(n: usize) -> usize {
+/// The inverse of `a` modulo `n` (`a` coprime to `n`, `n ≥ 2`), by the extended Euclidean algorithm.
+fn inverse_mod(a: usize, n: usize) -> usize {
+    let (mut r0, mut r1) = (n as i128, a as i128);
+    let (mut t0, mut t1) = (0i128, 1i128);
+    while r1 != 0 {
+        let q = r0 / r1;
+        (r0, r1) = (r1, r0 - q * r1);
+        (t0, t1) = (t1, t0 - q * t1);
+    }
+    t0.rem_euclid(n as i128) as usize
+}
+
+/// Korobov's vector `(1, a, a², a³) mod n`.
+fn korobov(n: usize, a: usize) -> [usize; 4] {
+    let (n, a) = (n as u128, a as u128);
+    [1, a % n, a * a % n, a * a % n * a % n].map(|v| v as usize)
+}
+
+/// The squared shortest dual vector of the worst of the six 2D projections of the 4D lattice `z`
+/// (every entry coprime to `n`, `n ≥ 2`).
+fn worst_projection_squared(n: usize, z: &[usize; 4]) -> u128 {
+    let mut worst = u128::MAX;
+    for i in 0..4 {
+        let inv = inverse_mod(z[i], n) as u128;
+        for &zj in &z[i + 1..] {
+            let g = (zj as u128 * inv % n as u128) as usize;
+            worst = worst.min(shortest_dual_squared(n, g));
+        }
+    }
+    worst
+}
+
+/// Among `c ≤ n / 2` coprime to `n`, the one with the largest `score(c)`, the smallest on ties (`c` and
+/// `n − c` give mirror images); 1 for `n ≤ 2`.
+fn best_coprime(n: usize, score: impl Fn(usize) -> u128) -> usize {
     let mut best = (0u128, 1usize);
-    for g in 1..=n / 2 {
-        if gcd(g, n) == 1 {
-            let len = shortest_dual_squared(n, g);
-            if len > best.0 {
-                best = (len, g);
-            }
+    for c in (1..=n / 2).filter(|&c| gcd(c, n) == 1) {
+        let s = score(c);
+        if s > best.0 {
+            best = (s, c);
         }
     }
     best.1
 }
 
-/// The lattice generator `g` for `n` points (see the module doc), searched once per `n` and kept.
-pub fn generator(n: usize) -> usize {
-    static FOUND: OnceLock<Mutex<HashMap<usize, usize>>> = OnceLock::new();
+/// The generating vector for `n` points in `dims` (2 or 4) dimensions (see the module doc), searched
+/// once per `(n, dims)` and kept.
+pub fn generating_vector(n: usize, dims: usize) -> Vec<usize> {
+    type Found = Mutex<HashMap<(usize, usize), Vec<usize>>>;
+    static FOUND: OnceLock<Found> = OnceLock::new();
     let found = FOUND.get_or_init(|| Mutex::new(HashMap::new()));
-    if let Some(&g) = found.lock().expect("generator cache").get(&n) {
-        return g;
+    if let Some(z) = found.lock().expect("generator cache").get(&(n, dims)) {
+        return z.clone();
     }
-    let g = search_generator(n);
-    found.lock().expect("generator cache").insert(n, g);
-    g
+    let z = if dims == 2 {
+        vec![1, best_coprime(n, |g| shortest_dual_squared(n, g))]
+    } else {
+        let a = best_coprime(n, |a| worst_projection_squared(n, &korobov(n, a)));
+        korobov(n, a).to_vec()
+    };
+    found
+        .lock()
+        .expect("generator cache")
+        .insert((n, dims), z.clone());
+    z
 }
 
-/// The randomly shifted rank-1 lattice of the module doc, in 2D.
+/// The randomly shifted rank-1 lattice of the module doc.
 #[derive(Clone, Debug)]
-pub struct Lattice;
+pub struct Lattice {
+    /// 2 or 4.
+    pub dims: usize,
+}
 
 impl Sampler for Lattice {
     fn name(&self) -> String {
         "lattice".into()
     }
     fn dims(&self) -> usize {
-        2
+        self.dims
     }
     fn check_n(&self, n: usize) -> std::result::Result<(), usize> {
         if n <= LATTICE_MAX_N {
@@ -95,13 +140,13 @@ impl Sampler for Lattice {
         }
     }
     fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64> {
-        let g = generator(n) as u64;
-        let shift: [f64; 2] = [rng.random(), rng.random()];
+        let z = generating_vector(n, self.dims);
+        let shift: Vec<f64> = (0..self.dims).map(|_| rng.random()).collect();
         let nf = n as f64;
-        let mut out = Vec::with_capacity(2 * n);
+        let mut out = Vec::with_capacity(self.dims * n);
         for i in 0..n as u64 {
-            let row = (g * i) % n as u64;
-            for (stratum, s) in [i, row].into_iter().zip(shift) {
+            for (&zd, s) in z.iter().zip(&shift) {
+                let stratum = zd as u64 * i % n as u64;
                 out.push(crate::points::wrap(stratum as f64 / nf + s));
             }
         }
@@ -143,7 +188,7 @@ mod tests {
     #[test]
     fn generator_is_the_best_over_every_g() {
         for n in [3usize, 16, 64, 89, 100, 144, 256, 1000] {
-            let g = generator(n);
+            let g = generating_vector(n, 2)[1];
             let best = (1..n)
                 .filter(|&h| gcd(h, n) == 1)
                 .map(|h| shortest_by_enumeration(n, h))
@@ -153,6 +198,33 @@ mod tests {
             assert!(gcd(g, n) == 1 && g <= n / 2);
         }
         // The Fibonacci lattice is optimal for a Fibonacci N: 89 points, generator 34 (or 55 = 89 − 34).
-        assert_eq!(generator(89), 34);
+        assert_eq!(generating_vector(89, 2), [1, 34]);
+    }
+
+    #[test]
+    fn korobov_vector_is_the_best_over_every_a() {
+        for n in [16usize, 64, 81, 100, 256] {
+            let z = generating_vector(n, 4);
+            // The worst projection by enumeration, for every Korobov `a`.
+            let worst = |z: &[usize; 4]| {
+                (0..4)
+                    .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
+                    .map(|(i, j)| {
+                        let g = z[j] * inverse_mod(z[i], n) % n;
+                        assert_eq!(g * z[i] % n, z[j] % n, "inverse of {} mod {n}", z[i]);
+                        shortest_by_enumeration(n, g)
+                    })
+                    .min()
+                    .unwrap()
+            };
+            let best = (1..n)
+                .filter(|&a| gcd(a, n) == 1)
+                .map(|a| worst(&korobov(n, a)))
+                .max()
+                .unwrap();
+            let z: [usize; 4] = z.try_into().unwrap();
+            assert_eq!(worst(&z), best, "n = {n}, z = {z:?}");
+            assert!(z.iter().all(|&c| gcd(c, n) == 1) && z[0] == 1);
+        }
     }
 }

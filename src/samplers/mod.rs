@@ -118,7 +118,9 @@ pub const NAMES_2D: [&str; 11] = [
 ];
 
 /// Names of the native 4D samplers.
-pub const NAMES_4D: [&str; 6] = ["random", "jittered", "nrooks", "halton", "sobol", "oa"];
+pub const NAMES_4D: [&str; 7] = [
+    "random", "jittered", "nrooks", "halton", "sobol", "oa", "lattice",
+];
 
 /// Every sampler name with its dimensions, a summary and its valid `N`.
 pub fn catalog() -> Vec<SamplerInfo> {
@@ -139,7 +141,7 @@ pub fn catalog() -> Vec<SamplerInfo> {
         e("blue", &[2], "blue noise: 20 Lloyd iterations on the torus (32 probes per point)", "any N"),
         e("halton", &[2, 4], "Halton, bases 2,3 (2D) or 2,3,5,7 (4D), random digit permutations", "any N"),
         e("sobol", &[2, 4], "Owen-scrambled Sobol (Burley 2020), f32 resolution", "any N <= 65536"),
-        e("lattice", &[2], "rank-1 lattice (Korobov) (i/N, g i/N mod 1), g with the longest shortest dual vector, randomly shifted", "any N <= 2^20"),
+        e("lattice", &[2, 4], "randomly shifted rank-1 lattice i z/N mod 1: 2D z = (1, g), 4D Korobov z = (1, a, a^2, a^3), chosen for the longest shortest dual vector (4D: in the worst 2D projection)", "any N <= 2^20"),
         e("oa", &[4], "orthogonal-array sampling, Bose OA(p^2, p+1, p, 2): 2D projections p x p, 1D N-stratified", "N = p^2, p an odd prime"),
         e("padded-NAME", &[4], "Cook padding: 2D sets of NAME in xy and uv joined by a random permutation", "the N that NAME allows"),
         e("xuyv-NAME", &[4], "2D sets of NAME in xu and yv joined by a random permutation", "the N that NAME allows"),
@@ -159,7 +161,7 @@ fn build_2d(name: &str) -> Option<Box<dyn Sampler>> {
         "blue" => Box::new(disk::Blue),
         "halton" => Box::new(lowdisc::Halton { dims: 2 }),
         "sobol" => Box::new(lowdisc::Sobol { dims: 2 }),
-        "lattice" => Box::new(lattice::Lattice),
+        "lattice" => Box::new(lattice::Lattice { dims: 2 }),
         _ => return None,
     })
 }
@@ -173,6 +175,7 @@ fn build_4d(name: &str) -> Option<Box<dyn Sampler>> {
         "halton" => Box::new(lowdisc::Halton { dims: 4 }),
         "sobol" => Box::new(lowdisc::Sobol { dims: 4 }),
         "oa" => Box::new(oa::OrthogonalArray),
+        "lattice" => Box::new(lattice::Lattice { dims: 4 }),
         _ => return None,
     })
 }

@@ -85,11 +85,11 @@ impl CompareConfig {
                 "sobol",
                 "padded-pmj02",
                 "oa",
-                "padded-lattice",
+                "lattice",
             ]
             .map(String::from)
             .to_vec(),
-            sheared: vec!["padded-mj".into(), "sobol".into(), "xuyv-lattice".into()],
+            sheared: vec!["padded-mj".into(), "sobol".into(), "lattice".into()],
             shear_modes: vec![ShearMode::Transported, ShearMode::Wrap],
             tables: vec![
                 PathBuf::from("targets/hairline.toml"),

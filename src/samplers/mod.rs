@@ -141,7 +141,7 @@ pub fn catalog() -> Vec<SamplerInfo> {
         e("blue", &[2], "blue noise: 20 Lloyd iterations on the torus (32 probes per point)", "any N"),
         e("halton", &[2, 4], "Halton, bases 2,3 (2D) or 2,3,5,7 (4D), random digit permutations", "any N"),
         e("sobol", &[2, 4], "Owen-scrambled Sobol (Burley 2020), f32 resolution", "any N <= 65536"),
-        e("lattice", &[2, 4], "randomly shifted rank-1 lattice i z/N mod 1: 2D z = (1, g), 4D Korobov z = (1, a, a^2, a^3), chosen for the longest shortest dual vector (4D: in the worst 2D projection)", "any N <= 2^20"),
+        e("lattice", &[2, 4], "rank-1 lattice i z/N mod 1, randomly shifted; z = (1, g) or Korobov (1, a, a^2, a^3) with the longest shortest dual vector (4D: worst 2D projection)", "any N <= 2^20"),
         e("oa", &[4], "orthogonal-array sampling, Bose OA(p^2, p+1, p, 2): 2D projections p x p, 1D N-stratified", "N = p^2, p an odd prime"),
         e("padded-NAME", &[4], "Cook padding: 2D sets of NAME in xy and uv joined by a random permutation", "the N that NAME allows"),
         e("xuyv-NAME", &[4], "2D sets of NAME in xu and yv joined by a random permutation", "the N that NAME allows"),

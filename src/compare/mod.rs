@@ -273,7 +273,12 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
                 let (sampler, seconds) = instantiate(spec, s.shear, s.shear_range, n, &tables)?;
                 setup.push(seconds);
                 let n = usable_n(sampler.as_ref(), n);
-                points.push(measure(sampler.as_ref(), s.integrand.as_ref(), n, &cfg)?);
+                // Requested N beyond a sampler's reach fall back on one N: measured once.
+                let point = match points.iter().find(|p: &&ConvergePoint| p.n == n) {
+                    Some(p) => p.clone(),
+                    None => measure(sampler.as_ref(), s.integrand.as_ref(), n, &cfg)?,
+                };
+                points.push(point);
             }
             studies.push(Study {
                 subject: s.label.clone(),

@@ -188,11 +188,15 @@ pub fn converge(
     })
 }
 
-/// `MSE ∝ N^slope` fitted through measured points (`None` with fewer than two N or a zero MSE).
+/// `MSE ∝ N^slope` fitted through measured points (`None` with fewer than two N or a zero MSE). A
+/// repeated N counts once (its first point): a sampler held at its largest N by several requested N
+/// repeats one measurement, which must not narrow the fit's interval.
 pub fn fit_points(points: &[ConvergePoint]) -> Option<SlopeFit> {
-    let n: Vec<f64> = points.iter().map(|p| p.n as f64).collect();
-    let v: Vec<f64> = points.iter().map(|p| p.mse).collect();
-    let se: Vec<f64> = points.iter().map(|p| p.mse_stderr).collect();
+    let mut seen = std::collections::HashSet::new();
+    let distinct: Vec<&ConvergePoint> = points.iter().filter(|p| seen.insert(p.n)).collect();
+    let n: Vec<f64> = distinct.iter().map(|p| p.n as f64).collect();
+    let v: Vec<f64> = distinct.iter().map(|p| p.mse).collect();
+    let se: Vec<f64> = distinct.iter().map(|p| p.mse_stderr).collect();
     fit_power_law(&n, &v, &se).ok()
 }
 
@@ -286,4 +290,31 @@ pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Res
             legend: LegendCorner::LowerLeft,
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(n: usize, mse: f64) -> ConvergePoint {
+        ConvergePoint {
+            n,
+            mse,
+            mse_stderr: 0.1 * mse,
+            mean_error: 0.0,
+            seconds: 0.0,
+            median_seconds: 0.0,
+            evaluations: 0,
+        }
+    }
+
+    #[test]
+    fn a_repeated_n_counts_once_in_the_fit() {
+        let distinct = [point(16, 1e-2), point(64, 2e-3), point(256, 3e-4)];
+        let mut repeated = distinct.to_vec();
+        repeated.push(point(256, 3e-4));
+        repeated.push(point(256, 3e-4));
+        assert_eq!(fit_points(&repeated), fit_points(&distinct));
+        assert!(fit_points(&[point(256, 3e-4), point(256, 3e-4)]).is_none());
+    }
 }

@@ -157,14 +157,15 @@ fn shearing_loses_on_the_double_wedge_pixel() {
     );
 }
 
-/// The oracle-sheared 4D rank-1 lattice leads on both renderer pixel classes at N = 1024 (R = 256): on
-/// the hairline pixel it beats every classical sampler and sheared Sobol and MJ by more than 3 combined
-/// standard errors; on the double-wedge pixel it beats unsheared Sobol, the best sampler there before
-/// the lattice, by more than 3. (Its gains vary with N: on the double-wedge pixel at N = 256 it is worse
-/// than Sobol, 1.7e-5 against 1.2e-5 in the default compare; not asserted.) Measured: 1.2e-7 against
-/// 2.6e-7 for sheared Sobol (z = 4.8) on the hairline pixel, 1.1e-6 against 2.2e-6 for Sobol (z = 5.0).
+/// The oracle-sheared 4D rank-1 lattice on the renderer's pixels at N = 1024 (R = 256). On the hairline
+/// pixel it beats every classical sampler and sheared Sobol and MJ by more than 3 combined standard
+/// errors: 1.2e-7 against 2.6e-7 for sheared Sobol (z = 4.8). On the double-wedge pixel it beats
+/// unsheared Sobol by more than 3: 1.1e-6 against 2.2e-6 (z = 5.0). Reported, not asserted: it is
+/// below the unsheared lattice there by z = 2.1 only (1.4e-6), and below the double-wedge and
+/// widened-hairline tables (8 sets, built in a run of this test) by z = 2.9 and 4.0. Its gains vary with N: on the
+/// double-wedge pixel at N = 256 it is worse than Sobol (1.7e-5 against 1.2e-5 in the default compare).
 #[test]
-fn sheared_lattice_leads_on_the_pixels() {
+fn sheared_lattice_on_the_pixels() {
     let dir = tempfile::tempdir().unwrap();
     let cfg = config(&["hairline", "double-wedge"]);
     let found = subjects(&cfg, dir.path()).unwrap();
@@ -193,19 +194,21 @@ fn sheared_lattice_leads_on_the_pixels() {
         assert!(z > 3.0, "{}", rival.label());
     }
     let t = mse(&lattice, wedge, n, 1.0, &tables);
-    let sobol = mse(
-        &SamplerSpec::Classical("sobol".into()),
-        wedge,
-        n,
-        1.0,
-        &tables,
-    );
-    let z = z_below(&t, &sobol);
-    eprintln!(
-        "double-wedge pixel N={n}: sheared lattice {:.3e} ± {:.1e}, sobol {:.3e} (z = {z:.1})",
-        t.mse, t.mse_stderr, sobol.mse
-    );
-    assert!(z > 3.0);
+    for rival in ["sobol", "lattice"] {
+        let c = mse(
+            &SamplerSpec::Classical(rival.into()),
+            wedge,
+            n,
+            1.0,
+            &tables,
+        );
+        let z = z_below(&t, &c);
+        eprintln!(
+            "double-wedge pixel N={n}: sheared lattice {:.3e} ± {:.1e}, {rival} {:.3e} (z = {z:.1})",
+            t.mse, t.mse_stderr, c.mse
+        );
+        assert!(rival != "sobol" || z > 3.0);
+    }
 }
 
 /// Robustness to the oracle: off by 25 %, the sheared hairline loses most of its gain on the
@@ -443,7 +446,8 @@ fn double_wedge_gains_on_the_fan() {
 /// with the oracle's shear 25 % too small it still beats them all. On the double-wedge pixel (shears
 /// -0.71 to 0: an in-focus edge over the blurred wall) the double-wedge table, designed in the frame of
 /// the in-focus layer (`tables::frame_shear`), beats the sheared MJ hairline by more than 3 and is not
-/// worse than unsheared Sobol, the best classical sampler there, by more than 3. Measured in the default
+/// worse than unsheared Sobol, the best of the classical samplers there (the 4D lattice is 1.3×
+/// lower still), by more than 3. Measured in the default
 /// compare run at N = 1024: 0.92× Sobol's MSE, where a table moved by the range's centre gave 0.43×.
 #[test]
 fn optimized_tables_on_the_renderer_pixels() {

@@ -314,6 +314,7 @@ mod tests {
         let mut repeated = distinct.to_vec();
         repeated.push(point(256, 3e-4));
         repeated.push(point(256, 3e-4));
+        assert!(fit_points(&distinct).is_some());
         assert_eq!(fit_points(&repeated), fit_points(&distinct));
         assert!(fit_points(&[point(256, 3e-4), point(256, 3e-4)]).is_none());
     }

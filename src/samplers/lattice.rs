@@ -10,13 +10,14 @@
 //!   dark disc around `k = 0`);
 //! - 4D, Korobov's `z = (1, a, a², a³)` in `(x, y, u, v)`: the `a` whose six 2D projections have the
 //!   longest shortest dual vector at their worst (each projection `(z_i, z_j)` is the 2D lattice
-//!   `(1, z_j / z_i mod N)`).
+//!   `(1, z_j / z_i mod N)`), then the largest sum of their squares. For N = 2, 3, 4, 6, 8, 12 and 24
+//!   every `a` has `a² ≡ 1 (mod N)`, so `u` repeats `x` and `v` repeats `y`.
 
 use super::Sampler;
 use crate::rng::Rng;
 use rand::Rng as _;
 use std::collections::HashMap;
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// The largest `N` a lattice is made for: the generator search visits every candidate `≤ N / 2`
 /// (at this size about 0.1 s in 2D and 0.4 s in 4D, once per `N`).
@@ -69,53 +70,57 @@ fn korobov(n: usize, a: usize) -> [usize; 4] {
     [1, a % n, a * a % n, a * a % n * a % n].map(|v| v as usize)
 }
 
-/// The squared shortest dual vector of the worst of the six 2D projections of the 4D lattice `z`
-/// (every entry coprime to `n`, `n ≥ 2`).
-fn worst_projection_squared(n: usize, z: &[usize; 4]) -> u128 {
-    let mut worst = u128::MAX;
-    for i in 0..4 {
+/// The squared shortest dual vectors of the six 2D projections of the 4D lattice `z` (every entry
+/// coprime to `n`, `n ≥ 2`): the worst of them, then their sum, which breaks ties among equally bad
+/// worst projections (at small `n`, where every `a` ties with the diagonal `a = 1`).
+fn projection_score(n: usize, z: &[usize; 4]) -> (u128, u128) {
+    let (mut worst, mut sum) = (u128::MAX, 0u128);
+    for i in 0..3 {
         let inv = inverse_mod(z[i], n) as u128;
         for &zj in &z[i + 1..] {
             let g = (zj as u128 * inv % n as u128) as usize;
-            worst = worst.min(shortest_dual_squared(n, g));
+            let len = shortest_dual_squared(n, g);
+            worst = worst.min(len);
+            sum += len;
         }
     }
-    worst
+    (worst, sum)
 }
 
 /// Among `c ≤ n / 2` coprime to `n`, the one with the largest `score(c)`, the smallest on ties (`c` and
-/// `n − c` give mirror images); 1 for `n ≤ 2`.
-fn best_coprime(n: usize, score: impl Fn(usize) -> u128) -> usize {
-    let mut best = (0u128, 1usize);
+/// `n − c` give mirror images); 1 when there is no candidate (`n = 1`).
+fn best_coprime<S: Ord>(n: usize, score: impl Fn(usize) -> S) -> usize {
+    let mut best: Option<(S, usize)> = None;
     for c in (1..=n / 2).filter(|&c| gcd(c, n) == 1) {
         let s = score(c);
-        if s > best.0 {
-            best = (s, c);
+        if best.as_ref().is_none_or(|(b, _)| s > *b) {
+            best = Some((s, c));
         }
     }
-    best.1
+    best.map_or(1, |(_, c)| c)
 }
 
 /// The generating vector for `n` points in `dims` (2 or 4) dimensions (see the module doc), searched
-/// once per `(n, dims)` and kept.
+/// once per `(n, dims)` and kept; threads that ask for it meanwhile wait for that one search.
 pub fn generating_vector(n: usize, dims: usize) -> Vec<usize> {
-    type Found = Mutex<HashMap<(usize, usize), Vec<usize>>>;
+    type Found = Mutex<HashMap<(usize, usize), Arc<OnceLock<Vec<usize>>>>>;
     static FOUND: OnceLock<Found> = OnceLock::new();
-    let found = FOUND.get_or_init(|| Mutex::new(HashMap::new()));
-    if let Some(z) = found.lock().expect("generator cache").get(&(n, dims)) {
-        return z.clone();
-    }
-    let z = if dims == 2 {
-        vec![1, best_coprime(n, |g| shortest_dual_squared(n, g))]
-    } else {
-        let a = best_coprime(n, |a| worst_projection_squared(n, &korobov(n, a)));
-        korobov(n, a).to_vec()
-    };
-    found
+    let slot = FOUND
+        .get_or_init(|| Mutex::new(HashMap::new()))
         .lock()
         .expect("generator cache")
-        .insert((n, dims), z.clone());
-    z
+        .entry((n, dims))
+        .or_default()
+        .clone();
+    slot.get_or_init(|| {
+        if dims == 2 {
+            vec![1, best_coprime(n, |g| shortest_dual_squared(n, g))]
+        } else {
+            let a = best_coprime(n, |a| projection_score(n, &korobov(n, a)));
+            korobov(n, a).to_vec()
+        }
+    })
+    .clone()
 }
 
 /// The randomly shifted rank-1 lattice of the module doc.
@@ -203,28 +208,30 @@ mod tests {
 
     #[test]
     fn korobov_vector_is_the_best_over_every_a() {
-        for n in [16usize, 64, 81, 100, 256] {
+        for n in [8usize, 12, 16, 24, 64, 81, 100, 256] {
             let z = generating_vector(n, 4);
-            // The worst projection by enumeration, for every Korobov `a`.
-            let worst = |z: &[usize; 4]| {
-                (0..4)
+            // (worst, sum) of the six projections' shortest dual vectors by enumeration.
+            let score = |z: &[usize; 4]| {
+                let lens: Vec<u128> = (0..4)
                     .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
                     .map(|(i, j)| {
                         let g = z[j] * inverse_mod(z[i], n) % n;
                         assert_eq!(g * z[i] % n, z[j] % n, "inverse of {} mod {n}", z[i]);
                         shortest_by_enumeration(n, g)
                     })
-                    .min()
-                    .unwrap()
+                    .collect();
+                (*lens.iter().min().unwrap(), lens.iter().sum::<u128>())
             };
             let best = (1..n)
                 .filter(|&a| gcd(a, n) == 1)
-                .map(|a| worst(&korobov(n, a)))
+                .map(|a| score(&korobov(n, a)))
                 .max()
                 .unwrap();
             let z: [usize; 4] = z.try_into().unwrap();
-            assert_eq!(worst(&z), best, "n = {n}, z = {z:?}");
+            assert_eq!(score(&z), best, "n = {n}, z = {z:?}");
             assert!(z.iter().all(|&c| gcd(c, n) == 1) && z[0] == 1);
+            // Not the diagonal, whose x, y, u and v would be one coordinate.
+            assert_ne!(z, [1, 1, 1, 1], "n = {n}");
         }
     }
 }

@@ -14,11 +14,12 @@ use std::io::Write;
 use std::path::PathBuf;
 
 /// The 2D samplers shown in `xy`.
-const GALLERY_2D: [&str; 10] = [
+const GALLERY_2D: [&str; 11] = [
     "random", "jittered", "nrooks", "mj", "cmj", "pmj02", "poisson", "blue", "halton", "sobol",
+    "lattice",
 ];
 /// The 4D samplers shown in `xu` (padded sets show the N-rooks cross or white noise there).
-const GALLERY_4D: [&str; 8] = [
+const GALLERY_4D: [&str; 9] = [
     "random",
     "jittered",
     "padded-mj",
@@ -26,6 +27,7 @@ const GALLERY_4D: [&str; 8] = [
     "sobol",
     "halton",
     "oa",
+    "lattice",
     "xuyv-mj",
 ];
 

@@ -859,3 +859,62 @@ fn compare_refuses_an_output_folder_that_is_a_file() {
         assert!(!report.exists());
     }
 }
+
+/// `anisospec gallery`: an index row per sampler (11 in 2D, 9 in 4D), each linking a PNG and a radial
+/// CSV that exist, beside an npy spectrum with `P(0) = N` (the N the index gives); and the two contact
+/// sheets.
+#[test]
+fn gallery_writes_every_sampler() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = anisospec(&[
+        "gallery",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "-n",
+        "64",
+        "--res",
+        "16",
+        "--realizations",
+        "4",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let gallery = dir.path().join("gallery");
+    let index = std::fs::read_to_string(gallery.join("index.md")).unwrap();
+    let rows: Vec<&str> = index
+        .lines()
+        .filter(|l| l.starts_with("| ") && l.contains(".png"))
+        .collect();
+    assert_eq!(rows.len(), 20, "{index}");
+    for name in ["2d_lattice_xy", "4d_lattice_xu"] {
+        assert!(index.contains(&format!("({name}.png)")), "{name} missing");
+    }
+    for row in &rows {
+        let stem = row
+            .split("](")
+            .nth(1)
+            .unwrap()
+            .split(".png")
+            .next()
+            .unwrap();
+        assert!(gallery.join(format!("{stem}.png")).exists(), "{stem}.png");
+        assert!(
+            gallery.join(format!("{stem}_radial.csv")).exists(),
+            "{stem} csv"
+        );
+        let bytes = std::fs::read(gallery.join(format!("{stem}.npy"))).unwrap();
+        let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
+        assert_eq!(npy.shape(), &[16, 16], "{stem}");
+        let values: Vec<f64> = npy.into_vec().unwrap();
+        // The N the sampler made (its nearest valid N to 64), from the row's N column.
+        let n: f64 = row.split('|').nth(4).unwrap().trim().parse().unwrap();
+        // The gallery's NUFFT (eps = 1e-6) keeps P within 10 eps relative.
+        assert!(
+            (values[8 * 16 + 8] - n).abs() < 1e-5 * n,
+            "{stem}: P(0) = {}",
+            values[136]
+        );
+    }
+    for sheet in ["sheet_2d_xy.png", "sheet_4d_xu.png"] {
+        assert!(gallery.join(sheet).exists(), "{sheet}");
+    }
+}

@@ -8,8 +8,8 @@
 //!     seconds, not microseconds); the time, the evaluations and their rate are printed to stderr and
 //!     written to `target/criterion/converge_sweep.csv`.
 //! (c) `generate`: one set of pmj02 (2D), padded-pmj02 (4D) and the lattice (2D, 4D) at N = 1024 and
-//!     65 536 on one thread, with Owen-scrambled Sobol beside them as the reference cost. Medians before and after pmj02's
-//!     bit-mask strata search (2-core machine shared with other jobs, load ≈ 3.5; old and new code
+//!     65 536 on one thread, with Owen-scrambled Sobol beside them as the reference cost. Medians
+//!     before and after pmj02's bit-mask strata search (2-core machine shared with other jobs, load ≈ 3.5; old and new code
 //!     run back to back, Sobol 2D steady at 18.5 µs): pmj02 N = 1024 222 → 70 µs, N = 65 536
 //!     22.4 → 13.2 ms; padded-pmj02 N = 1024 320 → 143 µs, N = 65 536 39.4 → 23.8 ms. The rank-1
 //!     lattice (generator cached after its first search): 2D 10.8 µs and 0.76 ms, 4D 25 µs and

@@ -162,8 +162,9 @@ fn shearing_loses_on_the_double_wedge_pixel() {
 /// errors: 1.2e-7 against 2.6e-7 for sheared Sobol (z = 4.8). On the double-wedge pixel it beats
 /// unsheared Sobol by more than 3: 1.1e-6 against 2.2e-6 (z = 5.0). Reported, not asserted: it is
 /// below the unsheared lattice there by z = 2.1 only (1.4e-6), and below the double-wedge and
-/// widened-hairline tables (8 sets, built in a run of this test) by z = 2.9 and 4.0. Its gains vary with N: on the
-/// double-wedge pixel at N = 256 it is worse than Sobol (1.7e-5 against 1.2e-5 in the default compare).
+/// widened-hairline tables (8 sets, built in a run of this test) by z = 2.9 and 4.0. Its gains vary
+/// with N: on the double-wedge pixel at N = 256 it is worse than Sobol (1.7e-5 against 1.2e-5 in the
+/// default compare).
 #[test]
 fn sheared_lattice_on_the_pixels() {
     let dir = tempfile::tempdir().unwrap();
@@ -194,21 +195,18 @@ fn sheared_lattice_on_the_pixels() {
         assert!(z > 3.0, "{}", rival.label());
     }
     let t = mse(&lattice, wedge, n, 1.0, &tables);
-    for rival in ["sobol", "lattice"] {
-        let c = mse(
-            &SamplerSpec::Classical(rival.into()),
-            wedge,
-            n,
-            1.0,
-            &tables,
-        );
+    let z_against = |name: &str| {
+        let c = mse(&SamplerSpec::Classical(name.into()), wedge, n, 1.0, &tables);
         let z = z_below(&t, &c);
         eprintln!(
-            "double-wedge pixel N={n}: sheared lattice {:.3e} ± {:.1e}, {rival} {:.3e} (z = {z:.1})",
+            "double-wedge pixel N={n}: sheared lattice {:.3e} ± {:.1e}, {name} {:.3e} (z = {z:.1})",
             t.mse, t.mse_stderr, c.mse
         );
-        assert!(rival != "sobol" || z > 3.0);
-    }
+        z
+    };
+    assert!(z_against("sobol") > 3.0);
+    // Reported only (z = 2.1 measured).
+    z_against("lattice");
 }
 
 /// Robustness to the oracle: off by 25 %, the sheared hairline loses most of its gain on the

@@ -121,11 +121,17 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             );
         }
     }
-    if let Some(out) = &args.output {
-        write_csv(out, &studies)?;
-    }
-    if let Some(png) = &args.plot {
-        plot(png, &studies, &format!("Convergence on {}", f.name()))?;
-    }
-    Ok(())
+    crate::output::write_group(&outputs, |staged| {
+        if let Some(out) = &args.output {
+            write_csv(&staged(out), &studies)?;
+        }
+        if let Some(png) = &args.plot {
+            plot(
+                &staged(png),
+                &studies,
+                &format!("Convergence on {}", f.name()),
+            )?;
+        }
+        Ok(())
+    })
 }

@@ -5,7 +5,7 @@ use crate::error::{Error, Result};
 use crate::optimize::{
     self, loss::Repulsion, metrics, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
 };
-use crate::output::{check_outputs, write_atomic};
+use crate::output::{check_outputs, write_atomic, write_group};
 use crate::points::io::write_points;
 use crate::points::PointSets;
 use crate::samplers;
@@ -220,9 +220,6 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     let wide = target.check_grid(args.n)?;
     let wide_fit = metrics::fit(&points, objective.terms[0].proj, &wide, setup.method);
 
-    write_points(&outputs[0], &points)?;
-    write_points(&outputs[1], &points)?;
-    write_header(&outputs[2], &points, args)?;
     let losses: Vec<f64> = reports.iter().map(|r| r.loss).collect();
     let sidecar = serde_json::json!({
         "target_file": args.target,
@@ -246,19 +243,26 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     });
     let text = serde_json::to_string_pretty(&sidecar)
         .map_err(|e| Error::Numerical(format!("cannot encode the sidecar: {e}")))?;
-    write_atomic(&outputs[3], |w| writeln!(w, "{text}"))?;
-    write_atomic(&outputs[4], |w| {
-        writeln!(w, "set,iter,seconds,loss,solver")?;
-        for r in &reports {
-            for row in &r.log {
-                writeln!(
-                    w,
-                    "{},{},{},{},{}",
-                    r.set, row.iter, row.seconds, row.loss, row.solver
-                )?;
+    let refs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
+    // All five or none: a failure midway leaves no table without its sidecar.
+    write_group(&refs, |staged| {
+        write_points(&staged(&outputs[0]), &points)?;
+        write_points(&staged(&outputs[1]), &points)?;
+        write_header(&staged(&outputs[2]), &points, args)?;
+        write_atomic(&staged(&outputs[3]), |w| writeln!(w, "{text}"))?;
+        write_atomic(&staged(&outputs[4]), |w| {
+            writeln!(w, "set,iter,seconds,loss,solver")?;
+            for r in &reports {
+                for row in &r.log {
+                    writeln!(
+                        w,
+                        "{},{},{},{},{}",
+                        r.set, row.iter, row.seconds, row.loss, row.solver
+                    )?;
+                }
             }
-        }
-        Ok(())
+            Ok(())
+        })
     })?;
     for f in &fits {
         eprintln!(

@@ -36,7 +36,6 @@ pub fn run(args: &OracleArgs) -> Result<()> {
     }
     let inputs: Vec<std::path::PathBuf> = args.scene.iter().cloned().collect();
     crate::output::check_outputs(&[&npy, &exr], &inputs)?;
-    crate::output::write_npy(&npy, &[h, w, ORACLE_CHANNELS.len()], &data)?;
     let channels: Vec<(&str, Vec<f32>)> = ORACLE_CHANNELS
         .iter()
         .enumerate()
@@ -50,7 +49,10 @@ pub fn run(args: &OracleArgs) -> Result<()> {
             (*name, plane)
         })
         .collect();
-    crate::output::image::write_exr(&exr, w, h, &channels)?;
+    crate::output::write_group(&[&npy, &exr], |staged| {
+        crate::output::write_npy(&staged(&npy), &[h, w, ORACLE_CHANNELS.len()], &data)?;
+        crate::output::image::write_exr(&staged(&exr), w, h, &channels)
+    })?;
     let count = |c: PixelClass| oracle.iter().filter(|o| o.class == c).count();
     println!(
         "oracle of {w}x{h} pixels: {} in focus, {} hairline, {} double wedge; wrote {} and {}",

@@ -67,10 +67,12 @@ pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
     let p = slice_spectrum(|x| f.value(x), proj, args.res, args.average)?;
     let k = args.res;
     let [npy, exr, png] = &outputs;
-    crate::output::write_npy(npy, &[k, k], &p)?;
-    crate::output::image::write_spectrum_exr(exr, &p, k)?;
     let (side, pixels) = spectrum_png_pixels(&p, k);
-    crate::output::image::write_png(png, side, side, 1, &pixels)?;
+    crate::output::write_group(&[npy, exr, png], |staged| {
+        crate::output::write_npy(&staged(npy), &[k, k], &p)?;
+        crate::output::image::write_spectrum_exr(&staged(exr), &p, k)?;
+        crate::output::image::write_png(&staged(png), side, side, 1, &pixels)
+    })?;
     println!(
         "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {} (.npy, .exr)",
         proj.name(),

@@ -146,13 +146,17 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
         }
         (None, None) => unreachable!("clap requires --sampler or --input"),
     };
-    write_spectrum(&spec, &args.output, &kinds)?;
-    if let Some(path) = &args.stderr {
-        write_npy(path, &[spec.res, spec.res], &spec.stderr)?;
-    }
-    if let Some(path) = &args.radial {
-        write_radial_csv(path, &radial_profile(&spec, args.cones))?;
-    }
+    crate::output::write_group(&outputs, |staged| {
+        let images: Vec<PathBuf> = args.output.iter().map(|p| staged(p)).collect();
+        write_spectrum(&spec, &images, &kinds)?;
+        if let Some(path) = &args.stderr {
+            write_npy(&staged(path), &[spec.res, spec.res], &spec.stderr)?;
+        }
+        if let Some(path) = &args.radial {
+            write_radial_csv(&staged(path), &radial_profile(&spec, args.cones))?;
+        }
+        Ok(())
+    })?;
     eprintln!(
         "spectrum of {} realizations of {} points on a {}x{} grid written to {}",
         spec.realizations,

@@ -42,6 +42,56 @@ where
     Ok(())
 }
 
+/// Writes several outputs of one command as a group, so that a failure leaves none of them (DESIGN
+/// §7): `write` is handed a map from each of `outputs` to a path in a temporary folder beside it, and
+/// writes there; only when it succeeds are the files it wrote moved into place. On failure the
+/// temporary folders go, and the outputs' old contents, if any, are untouched. The outputs' folders are
+/// created first, as each single write would.
+pub fn write_group<T>(
+    outputs: &[&Path],
+    write: impl FnOnce(&dyn Fn(&Path) -> PathBuf) -> Result<T>,
+) -> Result<T> {
+    let mut folders: Vec<(PathBuf, tempfile::TempDir)> = Vec::new();
+    let mut staged: Vec<(PathBuf, PathBuf)> = Vec::new();
+    for out in outputs {
+        let dir = match out.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let name = out
+            .file_name()
+            .ok_or_else(|| Error::Usage(format!("{}: give a file name", out.display())))?;
+        let slot = match folders.iter().position(|(d, _)| *d == dir) {
+            Some(i) => i,
+            None => {
+                std::fs::create_dir_all(&dir)
+                    .map_err(|e| Error::io("create the folder", &dir, e))?;
+                let tmp = tempfile::Builder::new()
+                    .prefix(".anisospec-")
+                    .tempdir_in(&dir)
+                    .map_err(|e| Error::io("create a temporary folder in", &dir, e))?;
+                folders.push((dir, tmp));
+                folders.len() - 1
+            }
+        };
+        staged.push((out.to_path_buf(), folders[slot].1.path().join(name)));
+    }
+    let staged_path = |out: &Path| -> PathBuf {
+        staged
+            .iter()
+            .find(|(o, _)| o == out)
+            .map(|(_, s)| s.clone())
+            .unwrap_or_else(|| panic!("{} is not an output of this group", out.display()))
+    };
+    let value = write(&staged_path)?;
+    for (out, tmp) in &staged {
+        if tmp.exists() {
+            std::fs::rename(tmp, out).map_err(|e| Error::io("write", out, e))?;
+        }
+    }
+    Ok(value)
+}
+
 /// Writes an `f64` array of the given shape (C order) as npy.
 pub fn write_npy(path: &Path, shape: &[usize], data: &[f64]) -> Result<()> {
     debug_assert_eq!(shape.iter().product::<usize>(), data.len());
@@ -125,12 +175,48 @@ fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-#[cfg(all(test, unix))]
+#[cfg(test)]
 mod tests {
     use super::*;
 
-    /// An atomically written file has the mode a plain `File::create` gives (0666 less the umask), not
-    /// the owner-only mode of the temporary file it started as.
+    fn leftovers(dir: &Path) -> Vec<String> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with(".anisospec-"))
+            .collect()
+    }
+
+    /// A group whose second write fails leaves neither output, keeps an existing output's old bytes,
+    /// and leaves no temporary folder; a group that succeeds writes both, in two folders.
+    #[test]
+    fn a_failed_group_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.csv"), dir.path().join("sub/b.txt"));
+        std::fs::write(&a, "old").unwrap();
+        let failed = write_group(&[&a, &b], |staged| {
+            write_atomic(&staged(&a), |w| writeln!(w, "new"))?;
+            Err::<(), _>(Error::Numerical("the second output failed".into()))
+        });
+        assert!(failed.is_err());
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "old");
+        assert!(!b.exists());
+        assert!(leftovers(dir.path()).is_empty());
+        assert!(leftovers(&dir.path().join("sub")).is_empty());
+
+        write_group(&[&a, &b], |staged| {
+            write_atomic(&staged(&a), |w| writeln!(w, "new a"))?;
+            write_atomic(&staged(&b), |w| writeln!(w, "new b"))
+        })
+        .unwrap();
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "new a\n");
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "new b\n");
+        assert!(leftovers(dir.path()).is_empty());
+    }
+
+    /// An atomically written file, alone or in a group, has the mode a plain `File::create` gives (0666
+    /// less the umask), not the owner-only mode of the temporary file or folder it started in.
+    #[cfg(unix)]
     #[test]
     fn atomic_writes_get_ordinary_permissions() {
         use std::os::unix::fs::PermissionsExt;
@@ -139,13 +225,21 @@ mod tests {
         std::fs::File::create(&plain).unwrap();
         let atomic = dir.path().join("atomic.txt");
         write_atomic(&atomic, |w| writeln!(w, "x")).unwrap();
+        let grouped = dir.path().join("grouped.txt");
+        write_group(&[&grouped], |staged| {
+            write_atomic(&staged(&grouped), |w| writeln!(w, "x"))
+        })
+        .unwrap();
         let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
-        assert_eq!(
-            mode(&atomic),
-            mode(&plain),
-            "mode {:o}, File::create gives {:o}",
-            mode(&atomic),
-            mode(&plain)
-        );
+        for written in [&atomic, &grouped] {
+            assert_eq!(
+                mode(written),
+                mode(&plain),
+                "{}: mode {:o}, File::create gives {:o}",
+                written.display(),
+                mode(written),
+                mode(&plain)
+            );
+        }
     }
 }

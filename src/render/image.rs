@@ -251,12 +251,14 @@ pub fn write_image_pair(
         .iter()
         .map(|(n, v)| (*n, v.iter().map(|&x| x as f32).collect()))
         .collect();
-    crate::output::image::write_exr(&exr_path, width, height, &chans)?;
     let pixels: Vec<u8> = channels[0]
         .1
         .iter()
         .map(|&v| ((v / PNG_WHITE).clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0).round() as u8)
         .collect();
-    crate::output::image::write_png(&png_path, width, height, 1, &pixels)?;
+    crate::output::write_group(&[&exr_path, &png_path], |staged| {
+        crate::output::image::write_exr(&staged(&exr_path), width, height, &chans)?;
+        crate::output::image::write_png(&staged(&png_path), width, height, 1, &pixels)
+    })?;
     Ok((exr_path, png_path))
 }

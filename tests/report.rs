@@ -3,6 +3,8 @@
 //! itself (every link, every PNG, the CSV against the npy arrays and report.md) and against further runs
 //! on the warm cache (tables reused, the same numbers).
 
+use anisospec::compare::tables::start_sampler;
+use anisospec::targets::Target;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -486,7 +488,8 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
         assert_eq!(row[4], format!("{:.2}×", classical / best[at_max].mse));
     }
 
-    // The tables: per integrand, the table's target, and its set-up at every N as in the CSV.
+    // The tables: per integrand, the table's target, the start of its optimization at every N, and
+    // its set-up at every N as in the CSV.
     let tables = &section("Tables").rows;
     assert_eq!(tables.len(), 1 + subjects.len(), "{tables:?}");
     for (row, (subject, _)) in tables[1..].iter().zip(&subjects) {
@@ -496,11 +499,20 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             .unwrap();
         assert_eq!(row[0], *subject);
         assert!(row[1].ends_with("hairline.toml"), "{row:?}");
+        let target = Target::load(Path::new(&row[1])).unwrap();
+        for p in study.iter() {
+            let start = start_sampler(&target, p.n);
+            assert!(
+                row[3].contains(start),
+                "{subject}: {start} at N = {}: {row:?}",
+                p.n
+            );
+        }
         let setups: Vec<String> = study
             .iter()
             .map(|p| format!("{:.2}", p.setup_seconds))
             .collect();
-        assert_eq!(row[4..], setups[..], "{subject}");
+        assert_eq!(row[5..], setups[..], "{subject}");
     }
 
     // The spectra gallery: one sheet per sampler, beside it the npy [projection, K, K] of expected

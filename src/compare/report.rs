@@ -2,7 +2,7 @@
 //! spectra gallery per sampler, and CSV / npy of every number.
 
 use super::config::{CompareConfig, GALLERY_SHEAR_RANGE};
-use super::tables::{frame_shear, table_frame, TableCache, TABLE_ITERATIONS};
+use super::tables::{frame_shear, start_sampler, table_frame, TableCache, TABLE_ITERATIONS};
 use super::{instantiate, usable_n, Outcome, SamplerSpec, Study, SubjectInfo};
 use crate::converge::{plot, Convergence};
 use crate::error::Result;
@@ -663,18 +663,18 @@ fn write_tables(
     writeln!(
         w,
         "Each optimized sampler is a table of {} sets per N, built for one integrand's shear range from the \
-         target file ({TABLE_ITERATIONS} iterations, x and y held at the centres of the start's strata) and cached; \
+         target file ({TABLE_ITERATIONS} iterations from the start named, x and y held at the centres of its strata) and cached; \
          each estimate uses one set with a random toroidal shift. A table for a range that holds 0 is designed \
          in the frame of the in-focus layer and not moved; any other is designed around the range's centre \
          and moved by the oracle's shear (seam-free). Set-up is the optimization time recorded when the table \
          was built, also when it is read back from the cache.\n",
         c.table_sets
     )?;
-    write!(w, "| integrand | table | designed for | moved by |")?;
+    write!(w, "| integrand | table | designed for | start | moved by |")?;
     for n in &c.ns {
         write!(w, " set-up s at N={n} |")?;
     }
-    writeln!(w, "\n|---|---|---|---|{}", "---|".repeat(c.ns.len()))?;
+    writeln!(w, "\n|---|---|---|---|---|{}", "---|".repeat(c.ns.len()))?;
     for subject in &outcome.subjects {
         for &target in &targets {
             let label = SamplerSpec::Table(target.to_path_buf()).label();
@@ -686,13 +686,25 @@ fn write_tables(
                 continue;
             };
             let range = subject.shear_range;
-            let design = match Target::load(target).map(|t| table_frame(t, range)) {
+            let framed = Target::load(target).map(|t| table_frame(t, range));
+            let design = match &framed {
                 Ok(Target::DoubleWedge(d)) => {
                     format!("double wedge, slopes {:.2} to {:.2}", d.s0, d.s1)
                 }
                 Ok(Target::Hairline(_)) => "hairline band, unsheared".to_string(),
                 Ok(t) => t.kind().to_string(),
                 Err(e) => format!("({e})"),
+            };
+            // The start at each N, named once when it does not change with N.
+            let starts: Vec<(usize, &str)> = match &framed {
+                Ok(t) => c.ns.iter().map(|&n| (n, start_sampler(t, n))).collect(),
+                Err(_) => Vec::new(),
+            };
+            let start = if starts.windows(2).all(|p| p[0].1 == p[1].1) {
+                starts.first().map_or("", |s| s.1).to_string()
+            } else {
+                let each: Vec<String> = starts.iter().map(|(n, s)| format!("N={n}: {s}")).collect();
+                each.join(", ")
             };
             let moved = if frame_shear(range) == 0.0 {
                 "not moved".to_string()
@@ -705,7 +717,7 @@ fn write_tables(
             };
             write!(
                 w,
-                "| {} | {} | {design} | {moved} |",
+                "| {} | {} | {design} | {start} | {moved} |",
                 subject.label,
                 target.display()
             )?;

@@ -107,7 +107,7 @@ pub fn within_reach(mut target: Target, n: usize) -> Result<Target> {
 ///   padded PMJ02 (xy and uv (0,2)-nets) where it allows `n`, else padded MJ.
 ///
 /// All are N-stratified in every coordinate.
-fn start_sampler(target: &Target, n: usize) -> &'static str {
+pub fn start_sampler(target: &Target, n: usize) -> &'static str {
     let pmj = crate::samplers::build("padded-pmj02", 4).expect("a built-in sampler");
     if matches!(target, Target::Hairline(h) if h.opening > 0.0) {
         "lattice"

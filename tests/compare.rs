@@ -239,10 +239,8 @@ fn sheared_hairline_degrades_with_oracle_error() {
 /// MJ by more than 3 combined standard errors, and the sheared MJ hairline is itself worse than with
 /// the exact shear by more than 3 (its gain is lost). With the oracle 25 % too large, the band itself
 /// counts: the widened table beats the optimized hairline table (targets/hairline.toml, the same
-/// centred strata without the opening band) by more than 3. Measured (8-set tables, R = 1024; the
-/// widened table starts from the 4D lattice, the hairline table from Sobol): at +10 % 1.18e-6 ± 1.1e-7
-/// against sheared MJ's 8.1e-6 ± 7e-7 (z = 9.6); at +25 % 1.98e-6 ± 9e-8 against 3.56e-6 ± 1.6e-7
-/// (z = 8.9; 2.1e-6 against 3.6e-6 from a Sobol start).
+/// centred strata without the opening band) by more than 3. Measured (8-set tables, R = 1024):
+/// 2.1e-6 ± 9e-8 against 3.6e-6 ± 1.6e-7, z = 8.0.
 #[test]
 fn widened_hairline_survives_oracle_error() {
     let dir = tempfile::tempdir().unwrap();
@@ -298,19 +296,17 @@ fn gain(a: &ConvergePoint, b: &ConvergePoint) -> (f64, f64) {
 /// Asserted: the table beats both jittered samplers by more than 3 combined standard errors at every N
 /// and error; at N = 1024 it beats every sheared hairline by more than 3 as well, and its gain over
 /// jittered on the xu plane at ±5 % exceeds the goal of 5 by more than 2 standard errors of the
-/// ratio. Measured (seeds fixed, R = 1024, edge offset c = 0.7, the table started from the 4D
-/// lattice as compare builds it): at N = 1024, 17.6–18.2× over xuyv-jittered and 78–81× over
-/// padded-jittered at ±5 % (7.7–8.5× and 34–37× at ±20 %), 2.9–10.3× over the sheared hairlines; at
-/// N = 256, 2.1–4.2× over them; at N = 64, where these errors do not break the hairlines yet,
-/// 1.2–1.8×, which is not asserted. (From a Sobol start: 9.7–9.8× and 43× at ±5 %, 2.1–8.9×, 1.3–3.7×
-/// and 1.2–1.5×; the band before, opening for 5 % only, gave 4.1–4.6× and 18–20× at ±20 %.)
+/// ratio. Measured (seeds fixed, R = 1024, edge offset c = 0.7, Sobol start): at N = 1024, 9.7–9.8×
+/// over xuyv-jittered and 43× over padded-jittered at ±5 % (6.9–7.3× and 31–32× at ±20 %), 2.1–8.9×
+/// over the sheared hairlines; at N = 256, 1.3–3.7× over them; at N = 64, where these errors do not
+/// break the hairlines yet, 1.2–1.5×, which is not asserted. (The band before, opening for 5 % only,
+/// gave 4.1–4.6× and 18–20× at ±20 %.)
 ///
-/// Reported, not asserted: sheared rank-1 lattices, outside the list. They still beat the
-/// table at nearly every N and error here. The table's gain over the lattice on the xu plane
-/// (`xuyv-lattice`) is 0.40–0.68× at N = 1024, 0.42–0.62× at 256 and 0.37–1.16× at 64; over the 4D
-/// Korobov lattice (`lattice`), 0.37–0.65×, 0.44–0.66× and 0.58–1.39× (from a Sobol start: 0.22–0.56×,
-/// 0.31–0.41× and 0.47–1.25×). Their dual lattices leave the erred edge's line dark out to about
-/// 2 sqrt(N); past that it meets isolated dual points, not a spectrum near 1.
+/// Reported, not asserted: sheared rank-1 lattices, outside the list. They beat the table at
+/// nearly every N and error here. The table's gain over the lattice on the xu plane (`xuyv-lattice`) is
+/// 0.22–0.44× at N = 1024, 0.30–0.44× at 256 and 0.33–1.02× at 64; over the 4D Korobov lattice
+/// (`lattice`), 0.22–0.56×, 0.31–0.41× and 0.47–1.25×. Their dual lattices leave the erred edge's line
+/// dark out to about 2 sqrt(N); past that it meets isolated dual points, not a spectrum near 1.
 #[test]
 fn widened_hairline_gains_under_oracle_error() {
     let dir = tempfile::tempdir().unwrap();

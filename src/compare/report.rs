@@ -686,8 +686,7 @@ fn write_tables(
                 continue;
             };
             let range = subject.shear_range;
-            let framed = Target::load(target).map(|t| table_frame(t, range));
-            let design = match &framed {
+            let design = match Target::load(target).map(|t| table_frame(t, range)) {
                 Ok(Target::DoubleWedge(d)) => {
                     format!("double wedge, slopes {:.2} to {:.2}", d.s0, d.s1)
                 }
@@ -696,10 +695,7 @@ fn write_tables(
                 Err(e) => format!("({e})"),
             };
             // The start at each N, named once when it does not change with N.
-            let starts: Vec<(usize, &str)> = match &framed {
-                Ok(t) => c.ns.iter().map(|&n| (n, start_sampler(t, n))).collect(),
-                Err(_) => Vec::new(),
-            };
+            let starts: Vec<(usize, &str)> = c.ns.iter().map(|&n| (n, start_sampler(n))).collect();
             let start = if starts.windows(2).all(|p| p[0].1 == p[1].1) {
                 starts.first().map_or("", |s| s.1).to_string()
             } else {

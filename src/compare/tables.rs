@@ -93,25 +93,14 @@ pub fn within_reach(mut target: Target, n: usize) -> Result<Target> {
     target.grid(n).map(|_| target)
 }
 
-/// The start of a table's sets.
-///
-/// - A hairline band that opens with `|k|` (`opening > 0`: made for oracle errors) starts from the 4D
-///   rank-1 lattice ([`crate::samplers::lattice`]), whose dual lattice leaves a tilted edge's line
-///   clear far beyond the band. Measured in the default compare at N = 1024 against a Sobol start:
-///   13–25 % lower MSE on the `xu` edge with the oracle's shear off by ±10 and ±25 %, and up to 1.8×
-///   lower on the back-wall pixel. The hairline and double-wedge tables got worse from it (3× on the
-///   edge at ±25 %, 10 % on the fan), so they keep the start below.
-/// - Otherwise Owen-scrambled Sobol where `n` is a power of two (its xy is a (0,2)-net and its xu and
-///   yv keep part of their structure through the optimization: 5-15 % lower MSE than a padded PMJ02
-///   start on the hairline edge with the shear off by 10-25 % at N = 1024, the same on the fan), else
-///   padded PMJ02 (xy and uv (0,2)-nets) where it allows `n`, else padded MJ.
-///
+/// The start of a table's sets: Owen-scrambled Sobol where `n` is a power of two (its xy is a
+/// (0,2)-net and its xu and yv keep part of their structure through the optimization: 5-15 % lower
+/// MSE than a padded PMJ02 start on the hairline edge with the shear off by 10-25 % at N = 1024, the
+/// same on the fan), else padded PMJ02 (xy and uv (0,2)-nets) where it allows `n`, else padded MJ.
 /// All are N-stratified in every coordinate.
-pub fn start_sampler(target: &Target, n: usize) -> &'static str {
+pub fn start_sampler(n: usize) -> &'static str {
     let pmj = crate::samplers::build("padded-pmj02", 4).expect("a built-in sampler");
-    if matches!(target, Target::Hairline(h) if h.opening > 0.0) {
-        "lattice"
-    } else if n.is_power_of_two() {
+    if n.is_power_of_two() {
         "sobol"
     } else if pmj.check_n(n).is_ok() {
         "padded-pmj02"
@@ -164,7 +153,7 @@ impl TableCache {
     fn table(&self, source: &Path, target: &Target, n: usize) -> Result<(Table, f64)> {
         let key = format!(
             "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|annular={DEFAULT_ANNULAR_WEIGHT}|centred|start={}|v7",
-            self.sets, self.seed, start_sampler(target, n)
+            self.sets, self.seed, start_sampler(n)
         );
         let stem = source
             .file_stem()
@@ -217,7 +206,6 @@ impl TableCache {
 /// What a table of `target` at `n` points is optimized with, stopping after `seconds` per set at
 /// the latest.
 fn table_setup(target: Target, n: usize, seconds: f64) -> Setup {
-    let start = start_sampler(&target, n);
     Setup {
         target,
         n,
@@ -231,9 +219,8 @@ fn table_setup(target: Target, n: usize, seconds: f64) -> Setup {
             tol: 1e-6,
         },
         // x and y are held where the start puts them (Latin): a Sobol or PMJ02 start keeps its
-        // (0,2)-net in xy, a lattice start its 2D lattice, what a pixel seen through the oracle's
-        // shear depends on most.
-        init: Some(start.to_string()),
+        // (0,2)-net in xy, what a pixel seen through the oracle's shear depends on most.
+        init: Some(start_sampler(n).to_string()),
         latin: true,
         annular_weight: DEFAULT_ANNULAR_WEIGHT,
     }
@@ -255,9 +242,8 @@ fn load_table(path: &Path, n: usize) -> Result<Table> {
 /// whose shears span `range`: the error [`TableCache::sampler`] would meet before its first iteration.
 pub fn check_buildable(target: Target, range: (f64, f64), n: usize) -> Result<()> {
     let framed = within_reach(table_frame(target, range), n)?;
-    let start = start_sampler(&framed, n);
     table_setup(framed, n, 1.0).objective()?;
-    crate::samplers::validate_n(crate::samplers::build(start, 4)?.as_ref(), n)
+    crate::samplers::validate_n(crate::samplers::build(start_sampler(n), 4)?.as_ref(), n)
 }
 
 #[cfg(test)]

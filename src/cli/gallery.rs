@@ -4,7 +4,7 @@
 use super::ImageKind;
 use crate::error::Result;
 use crate::output::sheet::{write_sheet, Panel};
-use crate::output::write_atomic;
+use crate::output::{write_atomic, write_folder};
 use crate::points::Projection;
 use crate::samplers::{self, usable_n};
 use crate::spectrum::expected::of_sampler;
@@ -58,82 +58,85 @@ pub struct GalleryArgs {
 pub fn run(args: &GalleryArgs) -> Result<()> {
     check_res(args.res)?;
     let method = Method::nufft(args.eps)?;
-    let dir = args.out.join("gallery");
-    let mut rows = Vec::new();
-    let mut spectra = Vec::new();
-    let jobs = GALLERY_2D
-        .iter()
-        .map(|&s| (s, 2, Projection::XY))
-        .chain(GALLERY_4D.iter().map(|&s| (s, 4, Projection::XU)));
-    for (name, dims, proj) in jobs {
-        let sampler = samplers::build(name, dims)?;
-        let n = usable_n(sampler.as_ref(), args.n);
-        let started = std::time::Instant::now();
-        let spec = of_sampler(
-            sampler.as_ref(),
-            n,
-            proj,
-            args.res,
-            args.realizations,
-            args.seed,
-            method,
-        )?;
-        let stem = format!("{dims}d_{name}_{}", proj.name());
-        let outputs = [
-            dir.join(format!("{stem}.png")),
-            dir.join(format!("{stem}.npy")),
-        ];
-        super::spectrum::write_spectrum(&spec, &outputs, &[ImageKind::Png, ImageKind::Npy])?;
-        write_radial_csv(
-            &dir.join(format!("{stem}_radial.csv")),
-            &radial_profile(&spec, 8),
-        )?;
-        eprintln!("{stem}: N = {n}, {:.2} s", started.elapsed().as_secs_f64());
-        rows.push((sampler.name(), dims, proj.name(), n, stem));
-        spectra.push(spec);
-    }
-    for (dims, file, title) in [
-        (2, "sheet_2d_xy.png", "2D samplers, xy"),
-        (4, "sheet_4d_xu.png", "4D samplers, xu"),
-    ] {
-        let panels: Vec<Panel> = rows
+    let gallery = args.out.join("gallery");
+    // The whole gallery or nothing: a failure leaves an earlier one as it was.
+    write_folder(&gallery, |dir| {
+        let mut rows = Vec::new();
+        let mut spectra = Vec::new();
+        let jobs = GALLERY_2D
             .iter()
-            .zip(&spectra)
-            .filter(|(row, _)| row.1 == dims)
-            .map(|(row, spec)| Panel {
-                label: format!("{} N={}", row.0, row.3),
-                values: &spec.mean,
-                res: spec.res,
-            })
-            .collect();
-        let title = format!(
-            "Expected power spectra: {title}, {} realizations",
-            args.realizations
-        );
-        write_sheet(&dir.join(file), &title, &panels, 5)?;
-    }
-    let index = dir.join("index.md");
-    write_atomic(&index, |w| {
-        writeln!(w, "# Expected power spectra of the classical samplers\n")?;
-        writeln!(
-            w,
-            "{} realizations each, K = {}, NUFFT eps = {}, seed {}. PNG: log10 P from -2 (black) to 1 (white), \
-             P = 1 (white noise) mid-grey, k1 horizontal, k2 up, k = 0 at the centre.\n",
-            args.realizations, args.res, args.eps, args.seed
-        )?;
-        writeln!(
-            w,
-            "| sampler | D | projection | N | spectrum | radial profile |"
-        )?;
-        writeln!(w, "|---|---|---|---|---|---|")?;
-        for (name, dims, proj, n, stem) in &rows {
+            .map(|&s| (s, 2, Projection::XY))
+            .chain(GALLERY_4D.iter().map(|&s| (s, 4, Projection::XU)));
+        for (name, dims, proj) in jobs {
+            let sampler = samplers::build(name, dims)?;
+            let n = usable_n(sampler.as_ref(), args.n);
+            let started = std::time::Instant::now();
+            let spec = of_sampler(
+                sampler.as_ref(),
+                n,
+                proj,
+                args.res,
+                args.realizations,
+                args.seed,
+                method,
+            )?;
+            let stem = format!("{dims}d_{name}_{}", proj.name());
+            let outputs = [
+                dir.join(format!("{stem}.png")),
+                dir.join(format!("{stem}.npy")),
+            ];
+            super::spectrum::write_spectrum(&spec, &outputs, &[ImageKind::Png, ImageKind::Npy])?;
+            write_radial_csv(
+                &dir.join(format!("{stem}_radial.csv")),
+                &radial_profile(&spec, 8),
+            )?;
+            eprintln!("{stem}: N = {n}, {:.2} s", started.elapsed().as_secs_f64());
+            rows.push((sampler.name(), dims, proj.name(), n, stem));
+            spectra.push(spec);
+        }
+        for (dims, file, title) in [
+            (2, "sheet_2d_xy.png", "2D samplers, xy"),
+            (4, "sheet_4d_xu.png", "4D samplers, xu"),
+        ] {
+            let panels: Vec<Panel> = rows
+                .iter()
+                .zip(&spectra)
+                .filter(|(row, _)| row.1 == dims)
+                .map(|(row, spec)| Panel {
+                    label: format!("{} N={}", row.0, row.3),
+                    values: &spec.mean,
+                    res: spec.res,
+                })
+                .collect();
+            let title = format!(
+                "Expected power spectra: {title}, {} realizations",
+                args.realizations
+            );
+            write_sheet(&dir.join(file), &title, &panels, 5)?;
+        }
+        write_atomic(&dir.join("index.md"), |w| {
+            writeln!(w, "# Expected power spectra of the classical samplers\n")?;
             writeln!(
                 w,
-                "| {name} | {dims} | {proj} | {n} | ![{stem}]({stem}.png) | [{stem}_radial.csv]({stem}_radial.csv) |"
+                "{} realizations each, K = {}, NUFFT eps = {}, seed {}. PNG: log10 P from -2 (black) to 1 (white), \
+                 P = 1 (white noise) mid-grey, k1 horizontal, k2 up, k = 0 at the centre.\n",
+                args.realizations, args.res, args.eps, args.seed
             )?;
-        }
-        Ok(())
+            writeln!(
+                w,
+                "| sampler | D | projection | N | spectrum | radial profile |"
+            )?;
+            writeln!(w, "|---|---|---|---|---|---|")?;
+            for (name, dims, proj, n, stem) in &rows {
+                writeln!(
+                    w,
+                    "| {name} | {dims} | {proj} | {n} | ![{stem}]({stem}.png) | [{stem}_radial.csv]({stem}_radial.csv) |"
+                )?;
+            }
+            Ok(())
+        })
     })?;
+    let index = gallery.join("index.md");
     eprintln!("gallery written to {}", index.display());
     Ok(())
 }

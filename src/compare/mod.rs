@@ -309,7 +309,10 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
         robustness,
         seconds: started.elapsed().as_secs_f64(),
     };
-    report::write(&outcome, &specs, &tables, out)?;
+    // The whole folder or nothing: a failure while writing it leaves an earlier report as it was.
+    crate::output::write_folder(out, |staging| {
+        report::write(&outcome, &specs, &tables, staging)
+    })?;
     Ok(outcome)
 }
 

@@ -92,6 +92,46 @@ pub fn write_group<T>(
     Ok(value)
 }
 
+/// Writes a folder of outputs as a group (a report, a gallery): `write` fills a temporary folder
+/// inside `dest`, and only when it succeeds are the files it wrote moved into `dest`, subfolders
+/// merged, files of the same names replaced and other files left alone. On failure none of `dest`'s
+/// files is touched, and `dest` itself goes again if this call created it.
+pub fn write_folder<T>(dest: &Path, write: impl FnOnce(&Path) -> Result<T>) -> Result<T> {
+    let created = !dest.exists();
+    std::fs::create_dir_all(dest).map_err(|e| Error::io("create the folder", dest, e))?;
+    let staged = tempfile::Builder::new()
+        .prefix(".anisospec-")
+        .tempdir_in(dest)
+        .map_err(|e| Error::io("create a temporary folder in", dest, e));
+    let result = staged.and_then(|staging| {
+        let value = write(staging.path())?;
+        move_tree(staging.path(), dest)?;
+        Ok(value)
+    });
+    if result.is_err() && created {
+        // Only an empty folder goes; a failure to remove it changes nothing.
+        let _ = std::fs::remove_dir(dest);
+    }
+    result
+}
+
+/// Moves every file under `from` to the same place under `to`, creating subfolders as needed.
+fn move_tree(from: &Path, to: &Path) -> Result<()> {
+    let entries = std::fs::read_dir(from).map_err(|e| Error::io("read the folder", from, e))?;
+    for entry in entries {
+        let entry = entry.map_err(|e| Error::io("read the folder", from, e))?;
+        let (path, target) = (entry.path(), to.join(entry.file_name()));
+        if path.is_dir() {
+            std::fs::create_dir_all(&target)
+                .map_err(|e| Error::io("create the folder", &target, e))?;
+            move_tree(&path, &target)?;
+        } else {
+            std::fs::rename(&path, &target).map_err(|e| Error::io("write", &target, e))?;
+        }
+    }
+    Ok(())
+}
+
 /// Writes an `f64` array of the given shape (C order) as npy.
 pub fn write_npy(path: &Path, shape: &[usize], data: &[f64]) -> Result<()> {
     debug_assert_eq!(shape.iter().product::<usize>(), data.len());
@@ -212,6 +252,53 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&a).unwrap(), "new a\n");
         assert_eq!(std::fs::read_to_string(&b).unwrap(), "new b\n");
         assert!(leftovers(dir.path()).is_empty());
+    }
+
+    /// A folder whose writing fails keeps its old files and gets no new one, and goes if the call
+    /// created it; one that succeeds gets every file, subfolders merged and other files left alone.
+    #[test]
+    fn a_failed_folder_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let report = dir.path().join("report");
+        let failed = write_folder(&report, |stage| {
+            write_atomic(&stage.join("a.md"), |w| writeln!(w, "a"))?;
+            Err::<(), _>(Error::Numerical("the plot failed".into()))
+        });
+        assert!(failed.is_err());
+        assert!(
+            !report.exists(),
+            "a folder this call created is left behind"
+        );
+
+        std::fs::create_dir_all(report.join("plots")).unwrap();
+        std::fs::write(report.join("a.md"), "old").unwrap();
+        std::fs::write(report.join("plots/keep.png"), "kept").unwrap();
+        let failed = write_folder(&report, |stage| {
+            write_atomic(&stage.join("a.md"), |w| writeln!(w, "new"))?;
+            Err::<(), _>(Error::Numerical("the plot failed".into()))
+        });
+        assert!(failed.is_err());
+        assert_eq!(std::fs::read_to_string(report.join("a.md")).unwrap(), "old");
+        assert!(leftovers(&report).is_empty());
+
+        write_folder(&report, |stage| {
+            write_atomic(&stage.join("a.md"), |w| writeln!(w, "new"))?;
+            write_atomic(&stage.join("plots/b.png"), |w| writeln!(w, "b"))
+        })
+        .unwrap();
+        assert_eq!(
+            std::fs::read_to_string(report.join("a.md")).unwrap(),
+            "new\n"
+        );
+        assert_eq!(
+            std::fs::read_to_string(report.join("plots/b.png")).unwrap(),
+            "b\n"
+        );
+        assert_eq!(
+            std::fs::read_to_string(report.join("plots/keep.png")).unwrap(),
+            "kept"
+        );
+        assert!(leftovers(&report).is_empty());
     }
 
     /// An atomically written file, alone or in a group, has the mode a plain `File::create` gives (0666

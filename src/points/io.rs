@@ -3,7 +3,7 @@
 use super::PointSets;
 use crate::error::{Error, Result};
 use crate::output::{write_atomic, write_npy};
-use std::io::Write;
+use std::io::{BufRead, Read, Write};
 use std::path::Path;
 
 /// The file formats a point set can be stored in.
@@ -29,17 +29,39 @@ impl Format {
     }
 }
 
-/// Reads a point set from `.npy` or text, checking every value (see [`PointSets::new`]).
+/// The largest npy header read: far beyond any real one (numpy pads them to 64-byte multiples).
+const MAX_NPY_HEADER: u64 = 1 << 20;
+
+/// Reads a point set from `.npy` or text, checking every value (see [`PointSets::new`]). A file
+/// holding more than [`super::MAX_COORDINATES`] coordinates is refused before it is read whole: an
+/// npy file by its size, a text file as soon as the count passes the limit.
 pub fn read_points(path: &Path) -> Result<PointSets> {
     let format = Format::of(path)?;
-    let bytes = std::fs::read(path).map_err(|e| Error::read_input(path, e))?;
+    let file = std::fs::File::open(path).map_err(|e| Error::read_input(path, e))?;
     let named = |e: Error| match e {
         Error::Input(m) => Error::Input(format!("{}: {m}", path.display())),
         other => other,
     };
     match format {
-        Format::Npy => parse_npy(&bytes),
-        Format::Text => parse_text(&String::from_utf8_lossy(&bytes)),
+        Format::Npy => {
+            let len = file
+                .metadata()
+                .map_err(|e| Error::read_input(path, e))?
+                .len();
+            let limit = super::MAX_COORDINATES as u64 * 8 + MAX_NPY_HEADER;
+            if len > limit {
+                return Err(named(Error::Input(format!(
+                    "{len} bytes, more than the {} float64 coordinates (2 GiB) a point set may hold; split it into several files",
+                    super::MAX_COORDINATES
+                ))));
+            }
+            let mut bytes = Vec::with_capacity(len as usize);
+            (&file)
+                .read_to_end(&mut bytes)
+                .map_err(|e| Error::read_input(path, e))?;
+            parse_npy(&bytes)
+        }
+        Format::Text => parse_text(std::io::BufReader::new(file), super::MAX_COORDINATES),
     }
     .map_err(named)
 }
@@ -202,11 +224,23 @@ fn fortran_to_c(shape: &[usize], values: &[f64]) -> Vec<f64> {
     out
 }
 
-fn parse_text(text: &str) -> Result<PointSets> {
+/// Parses the text format, refusing more than `limit` coordinates as soon as the count passes it. Bytes
+/// that are not UTF-8 are read as replacement characters (and then fail as numbers).
+fn parse_text(mut reader: impl BufRead, limit: usize) -> Result<PointSets> {
     let mut sets: Vec<Vec<f64>> = vec![Vec::new()];
     let mut dims: Option<usize> = None;
-    for (line_no, line) in text.lines().enumerate() {
-        let line = line.trim();
+    let mut count = 0usize;
+    let mut raw = Vec::new();
+    for line_no in 0.. {
+        raw.clear();
+        let read = reader
+            .read_until(b'\n', &mut raw)
+            .map_err(|e| Error::Input(format!("cannot read line {}: {e}", line_no + 1)))?;
+        if read == 0 {
+            break;
+        }
+        let text = String::from_utf8_lossy(&raw);
+        let line = text.trim();
         if line.is_empty() {
             continue;
         }
@@ -237,6 +271,13 @@ fn parse_text(text: &str) -> Result<PointSets> {
                 )))
             }
             _ => {}
+        }
+        count += coords.len();
+        if count > limit {
+            return Err(Error::Input(format!(
+                "line {}: more than the {limit} coordinates a point set may hold; split it into several files",
+                line_no + 1
+            )));
         }
         sets.last_mut()
             .expect("one set is always open")
@@ -278,7 +319,11 @@ mod tests {
 
     #[test]
     fn text_round_trip_with_separators() {
-        let p = parse_text("0.1 0.2\n0.3 0.4\n#\n0.5 0.6\n0.7 0.8\n#\n").unwrap();
+        let p = parse_text(
+            "0.1 0.2\n0.3 0.4\n#\n0.5 0.6\n0.7 0.8\n#\n".as_bytes(),
+            crate::points::MAX_COORDINATES,
+        )
+        .unwrap();
         assert_eq!((p.sets(), p.n(), p.dims()), (2, 2, 2));
         assert_eq!(p.set(1), &[0.5, 0.6, 0.7, 0.8]);
     }
@@ -362,9 +407,31 @@ mod tests {
 
     #[test]
     fn text_rejects_ragged_and_garbage() {
-        assert!(parse_text("0.1 0.2\n0.3\n").is_err());
-        assert!(parse_text("0.1 abc\n").is_err());
-        assert!(parse_text("\n\n").is_err());
-        assert!(parse_text("0.1 0.2\n#\n0.3 0.4\n0.5 0.6\n").is_err());
+        let parse = |text: &str| parse_text(text.as_bytes(), crate::points::MAX_COORDINATES);
+        assert!(parse("0.1 0.2\n0.3\n").is_err());
+        assert!(parse("0.1 abc\n").is_err());
+        assert!(parse("\n\n").is_err());
+        assert!(parse("0.1 0.2\n#\n0.3 0.4\n0.5 0.6\n").is_err());
+    }
+
+    #[test]
+    fn oversized_files_are_refused_before_they_are_read() {
+        // Text: the count is checked line by line against the limit.
+        let two_sets = "0.1 0.2\n0.3 0.4\n#\n0.5 0.6\n0.7 0.8\n";
+        assert!(parse_text(two_sets.as_bytes(), 8).is_ok());
+        let e = parse_text(two_sets.as_bytes(), 7).unwrap_err().to_string();
+        assert!(
+            e.contains("line 5") && e.contains("more than the 7 coordinates"),
+            "{e}"
+        );
+        // npy: by the file's size alone (a sparse file, never read).
+        let dir = tempfile::tempdir().unwrap();
+        let big = dir.path().join("big.npy");
+        let size = crate::points::MAX_COORDINATES as u64 * 8 + MAX_NPY_HEADER + 1;
+        std::fs::File::create(&big).unwrap().set_len(size).unwrap();
+        let e = read_points(&big).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("split it into several files"), "{e}");
+        assert_eq!(std::fs::metadata(&big).unwrap().len(), size);
     }
 }

@@ -61,6 +61,11 @@ fn main() -> ExitCode {
                  PATH may hold {{n}} for a family of tables at several N); each use takes one set at \
                  random and shifts it  [N: the tables' own]"
             );
+            println!(
+                "lattice:Z    2D,4D  rank-1 lattice with the generating vector Z you give, e.g. \
+                 lattice:1:34 or lattice:1:163:271:141 (entries taken mod N), randomly shifted  \
+                 [N: any N <= 2^20]"
+            );
             Ok(())
         }
         Command::Sample(a) => cli::sample::run(a),

@@ -588,3 +588,48 @@ fn lattice_is_nrooks_with_its_spectrum_on_the_dual_lattice() {
         }
     }
 }
+
+/// `lattice:Z` takes the generating vector given: with the built-in lattice's own vector it draws the
+/// same bits for a seed (2D Fibonacci 89 points, 4D Korobov 256 points); entries are taken mod N (an
+/// entry N + 34 is 34); a wrong count or a non-number is a usage error naming the form.
+#[test]
+fn given_lattice_takes_its_generating_vector() {
+    use anisospec::samplers::lattice::generating_vector;
+    for (n, dims) in [(89usize, 2usize), (256, 4)] {
+        let z: Vec<String> = generating_vector(n, dims)
+            .iter()
+            .map(|c| c.to_string())
+            .collect();
+        let name = format!("lattice:{}", z.join(":"));
+        assert_eq!(build(&name, dims).unwrap().name(), name);
+        assert_eq!(
+            one_set(&name, dims, n, 9),
+            one_set("lattice", dims, n, 9),
+            "{name}"
+        );
+    }
+    assert_eq!(
+        one_set("lattice:1:123", 2, 89, 4),
+        one_set("lattice:1:34", 2, 89, 4)
+    );
+    for (name, dims, says) in [
+        ("lattice:1:2:3", 2, "has 3 entries but the sets are 2D"),
+        ("lattice:1:34", 4, "has 2 entries but the sets are 4D"),
+        ("lattice:1:x", 2, "'x' is not a whole number"),
+        ("lattice:", 2, "is not a whole number"),
+        ("lattice:1:-3", 2, "'-3' is not a whole number"),
+    ] {
+        match build(name, dims) {
+            Err(e @ Error::Usage(_)) => {
+                let m = e.to_string();
+                assert!(
+                    m.contains(says) && m.contains("lattice:1:34 (2D)"),
+                    "{name}: {m}"
+                );
+                assert_eq!(e.exit_code(), 2);
+            }
+            Err(e) => panic!("{name}: {e} is not a usage error"),
+            Ok(_) => panic!("{name} {dims}D was accepted"),
+        }
+    }
+}

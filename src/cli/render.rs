@@ -21,7 +21,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// 4D sampler (see `anisospec samplers`), e.g. random, oa, sobol, padded-mj, xuyv-mj, or
-    /// table:PATH (optimized sets). Not needed with --reference.
+    /// table:PATH (optimized sets), or lattice:Z1:Z2:Z3:Z4 (a rank-1 lattice with that generating
+    /// vector). Not needed with --reference.
     #[arg(long, required_unless_present = "reference")]
     pub sampler: Option<String>,
     /// Samples (rays) per pixel; must be a count the sampler allows.

@@ -12,8 +12,11 @@
 //!   longest shortest dual vector at their worst (each projection `(z_i, z_j)` is the 2D lattice
 //!   `(1, z_j / z_i mod N)`), then the largest sum of their squares. For N = 2, 3, 4, 6, 8, 12 and 24
 //!   every `a` has `a² ≡ 1 (mod N)`, so `u` repeats `x` and `v` repeats `y`.
+//!
+//! [`GivenLattice`] (sampler `lattice:Z1:Z2[:Z3:Z4]`) takes a generating vector from the user instead.
 
 use super::Sampler;
+use crate::error::{Error, Result};
 use crate::rng::Rng;
 use rand::Rng as _;
 use std::collections::HashMap;
@@ -145,18 +148,82 @@ impl Sampler for Lattice {
         }
     }
     fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64> {
-        let z = generating_vector(n, self.dims);
-        let shift: Vec<f64> = (0..self.dims).map(|_| rng.random()).collect();
-        let nf = n as f64;
-        let mut out = Vec::with_capacity(self.dims * n);
-        for i in 0..n as u64 {
-            for (&zd, s) in z.iter().zip(&shift) {
-                let stratum = zd as u64 * i % n as u64;
-                out.push(crate::points::wrap(stratum as f64 / nf + s));
-            }
-        }
-        out
+        let z: Vec<u64> = generating_vector(n, self.dims)
+            .into_iter()
+            .map(|c| c as u64)
+            .collect();
+        shifted_lattice(&z, n, rng)
     }
+}
+
+/// A randomly shifted rank-1 lattice with a generating vector the user gives (sampler
+/// `lattice:Z1:Z2[:Z3:Z4]`), e.g. a published one: the points `frac(i z / N + shift)`, each `z_d`
+/// taken mod N. Entries coprime to N keep every coordinate N-stratified.
+#[derive(Clone, Debug)]
+pub struct GivenLattice {
+    z: Vec<u64>,
+}
+
+impl GivenLattice {
+    /// Parses the generating vector `spec` (the part after `lattice:`, entries separated by colons, as
+    /// `converge --sampler` splits its list at commas) for `dims` dimensions; a usage error names what
+    /// is wrong and the form to use.
+    pub fn parse(spec: &str, dims: usize) -> Result<Self> {
+        let form = "write the generating vector's entries separated by colons, e.g. lattice:1:34 (2D) or lattice:1:163:271:141 (4D)";
+        let z = spec
+            .split(':')
+            .map(|t| {
+                t.trim().parse::<u64>().map_err(|_| {
+                    Error::Usage(format!(
+                        "lattice:{spec}: '{t}' is not a whole number >= 0; {form}"
+                    ))
+                })
+            })
+            .collect::<Result<Vec<u64>>>()?;
+        if z.len() != dims {
+            return Err(Error::Usage(format!(
+                "lattice:{spec} has {} entries but the sets are {dims}D; give {dims} ({form})",
+                z.len()
+            )));
+        }
+        Ok(Self { z })
+    }
+}
+
+impl Sampler for GivenLattice {
+    fn name(&self) -> String {
+        let z: Vec<String> = self.z.iter().map(u64::to_string).collect();
+        format!("lattice:{}", z.join(":"))
+    }
+    fn dims(&self) -> usize {
+        self.z.len()
+    }
+    fn check_n(&self, n: usize) -> std::result::Result<(), usize> {
+        if n <= LATTICE_MAX_N {
+            Ok(())
+        } else {
+            Err(LATTICE_MAX_N)
+        }
+    }
+    fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64> {
+        shifted_lattice(&self.z, n, rng)
+    }
+}
+
+/// The `n` points `frac(i z / n + shift)` of the rank-1 lattice with generating vector `z` (one entry
+/// per dimension), for one uniform random `shift` drawn from `rng`; `[n, z.len()]` row-major.
+fn shifted_lattice(z: &[u64], n: usize, rng: &mut Rng) -> Vec<f64> {
+    let shift: Vec<f64> = z.iter().map(|_| rng.random()).collect();
+    let (nf, n64) = (n as f64, n as u64);
+    let mut out = Vec::with_capacity(z.len() * n);
+    for i in 0..n64 {
+        for (&zd, s) in z.iter().zip(&shift) {
+            // (zd mod n) · i < 2^40 for n <= 2^20: no overflow.
+            let stratum = zd % n64 * i % n64;
+            out.push(crate::points::wrap(stratum as f64 / nf + s));
+        }
+    }
+    out
 }
 
 #[cfg(test)]

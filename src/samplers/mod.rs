@@ -240,6 +240,9 @@ pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
     if let Some(pattern) = name.strip_prefix("table:") {
         return Ok(Box::new(table::Table::load(pattern, dims)?));
     }
+    if let Some(z) = name.strip_prefix("lattice:") {
+        return Ok(Box::new(lattice::GivenLattice::parse(z, dims)?));
+    }
     if dims == 2 {
         if let Some(s) = build_2d(name) {
             return Ok(s);

@@ -60,5 +60,23 @@ impl Error {
     }
 }
 
+impl Error {
+    /// The same error with every mention of the path `from` replaced by `to`: a failure while writing a
+    /// staged output names the output, not the temporary folder it was written in.
+    pub fn with_path_replaced(self, from: &Path, to: &Path) -> Self {
+        let (from, to) = (from.display().to_string(), to.display().to_string());
+        let fix = |m: String| m.replace(&from, &to);
+        match self {
+            Error::Usage(m) => Error::Usage(fix(m)),
+            Error::Input(m) => Error::Input(fix(m)),
+            Error::Io { context, source } => Error::Io {
+                context: fix(context),
+                source,
+            },
+            Error::Numerical(m) => Error::Numerical(fix(m)),
+        }
+    }
+}
+
 /// Result with the crate's [`Error`].
 pub type Result<T> = std::result::Result<T, Error>;

@@ -1,5 +1,7 @@
 //! Writing results: every file is written to a temporary sibling and renamed into place (DESIGN §7),
-//! so a failed run leaves no half-written file.
+//! so a failed run leaves no half-written file. A command with several outputs writes them as a group
+//! ([`write_group`]), and a report or gallery as a whole folder ([`write_folder`]): a failure while
+//! writing leaves none of the new files.
 
 pub mod image;
 pub mod plot;
@@ -42,11 +44,11 @@ where
     Ok(())
 }
 
-/// Writes several outputs of one command as a group, so that a failure leaves none of them (DESIGN
-/// §7): `write` is handed a map from each of `outputs` to a path in a temporary folder beside it, and
-/// writes there; only when it succeeds are the files it wrote moved into place. On failure the
-/// temporary folders go, and the outputs' old contents, if any, are untouched. The outputs' folders are
-/// created first, as each single write would.
+/// Writes several outputs of one command as a group, so that a failure while writing leaves none of
+/// them (DESIGN §7): `write` is handed a map from each of `outputs` to a path in a temporary folder
+/// beside it, and writes there. Only when it succeeds, and no folder stands where an output goes, are
+/// the files it wrote moved into place; an error names the output, not its temporary path. The
+/// outputs' folders are created first, as each single write would.
 pub fn write_group<T>(
     outputs: &[&Path],
     write: impl FnOnce(&dyn Fn(&Path) -> PathBuf) -> Result<T>,
@@ -64,13 +66,7 @@ pub fn write_group<T>(
         let slot = match folders.iter().position(|(d, _)| *d == dir) {
             Some(i) => i,
             None => {
-                std::fs::create_dir_all(&dir)
-                    .map_err(|e| Error::io("create the folder", &dir, e))?;
-                let tmp = tempfile::Builder::new()
-                    .prefix(".anisospec-")
-                    .tempdir_in(&dir)
-                    .map_err(|e| Error::io("create a temporary folder in", &dir, e))?;
-                folders.push((dir, tmp));
+                folders.push((dir.clone(), staging_folder(&dir)?));
                 folders.len() - 1
             }
         };
@@ -83,28 +79,35 @@ pub fn write_group<T>(
             .map(|(_, s)| s.clone())
             .unwrap_or_else(|| panic!("{} is not an output of this group", out.display()))
     };
-    let value = write(&staged_path)?;
-    for (out, tmp) in &staged {
-        if tmp.exists() {
-            std::fs::rename(tmp, out).map_err(|e| Error::io("write", out, e))?;
+    let value = write(&staged_path).map_err(|e| {
+        folders
+            .iter()
+            .fold(e, |e, (dir, tmp)| e.with_path_replaced(tmp.path(), dir))
+    })?;
+    let written: Vec<&(PathBuf, PathBuf)> = staged.iter().filter(|(_, t)| t.exists()).collect();
+    for (out, _) in &written {
+        if out.is_dir() {
+            return Err(folder_in_the_way(out));
         }
+    }
+    for (out, tmp) in written {
+        move_file(tmp, out)?;
     }
     Ok(value)
 }
 
 /// Writes a folder of outputs as a group (a report, a gallery): `write` fills a temporary folder
-/// inside `dest`, and only when it succeeds are the files it wrote moved into `dest`, subfolders
-/// merged, files of the same names replaced and other files left alone. On failure none of `dest`'s
-/// files is touched, and `dest` itself goes again if this call created it.
+/// inside `dest`, and only when it succeeds, and no file of the new set clashes with a folder of the
+/// old (or a folder with a file), are the files it wrote moved into `dest`: subfolders merged, files
+/// of the same names replaced, other files left alone. On failure none of `dest`'s files is touched,
+/// `dest` itself goes again if this call created it, and an error names the final path, not the
+/// temporary one.
 pub fn write_folder<T>(dest: &Path, write: impl FnOnce(&Path) -> Result<T>) -> Result<T> {
     let created = !dest.exists();
-    std::fs::create_dir_all(dest).map_err(|e| Error::io("create the folder", dest, e))?;
-    let staged = tempfile::Builder::new()
-        .prefix(".anisospec-")
-        .tempdir_in(dest)
-        .map_err(|e| Error::io("create a temporary folder in", dest, e));
-    let result = staged.and_then(|staging| {
-        let value = write(staging.path())?;
+    let result = staging_folder(dest).and_then(|staging| {
+        let value =
+            write(staging.path()).map_err(|e| e.with_path_replaced(staging.path(), dest))?;
+        check_tree(staging.path(), dest)?;
         move_tree(staging.path(), dest)?;
         Ok(value)
     });
@@ -113,6 +116,44 @@ pub fn write_folder<T>(dest: &Path, write: impl FnOnce(&Path) -> Result<T>) -> R
         let _ = std::fs::remove_dir(dest);
     }
     result
+}
+
+/// A temporary folder inside `dir` (created if missing), on the file system of the outputs.
+fn staging_folder(dir: &Path) -> Result<tempfile::TempDir> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io("create the folder", dir, e))?;
+    tempfile::Builder::new()
+        .prefix(".anisospec-")
+        .tempdir_in(dir)
+        .map_err(|e| Error::io("create a temporary folder in", dir, e))
+}
+
+fn folder_in_the_way(out: &Path) -> Error {
+    Error::Usage(format!(
+        "cannot write {}: a folder stands where the file goes; move it away or choose another output",
+        out.display()
+    ))
+}
+
+/// Checks, before anything moves, that every file under `from` can go to the same place under `to`:
+/// no folder where a file goes, no file where a folder goes.
+fn check_tree(from: &Path, to: &Path) -> Result<()> {
+    let entries = std::fs::read_dir(from).map_err(|e| Error::io("read the folder", from, e))?;
+    for entry in entries {
+        let entry = entry.map_err(|e| Error::io("read the folder", from, e))?;
+        let (path, target) = (entry.path(), to.join(entry.file_name()));
+        if path.is_dir() {
+            if target.exists() && !target.is_dir() {
+                return Err(Error::Usage(format!(
+                    "cannot write into {}: a file stands where the folder goes; move it away or choose another output folder",
+                    target.display()
+                )));
+            }
+            check_tree(&path, &target)?;
+        } else if target.is_dir() {
+            return Err(folder_in_the_way(&target));
+        }
+    }
+    Ok(())
 }
 
 /// Moves every file under `from` to the same place under `to`, creating subfolders as needed.
@@ -126,10 +167,32 @@ fn move_tree(from: &Path, to: &Path) -> Result<()> {
                 .map_err(|e| Error::io("create the folder", &target, e))?;
             move_tree(&path, &target)?;
         } else {
-            std::fs::rename(&path, &target).map_err(|e| Error::io("write", &target, e))?;
+            move_file(&path, &target)?;
         }
     }
     Ok(())
+}
+
+/// Renames `from` onto `to`; where `to` lies on another file system (a linked subfolder), copies it
+/// beside `to` first, then renames the copy into place.
+fn move_file(from: &Path, to: &Path) -> Result<()> {
+    match std::fs::rename(from, to) {
+        Err(e) if e.kind() == std::io::ErrorKind::CrossesDevices => {
+            let dir = match to.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d,
+                _ => Path::new("."),
+            };
+            let copy = tempfile::Builder::new()
+                .prefix(".anisospec-")
+                .tempfile_in(dir)
+                .map_err(|e| Error::io("create a temporary file in", dir, e))?;
+            std::fs::copy(from, copy.path()).map_err(|e| Error::io("write", to, e))?;
+            copy.persist(to)
+                .map_err(|e| Error::io("write", to, e.error))?;
+            Ok(())
+        }
+        other => other.map_err(|e| Error::io("write", to, e)),
+    }
 }
 
 /// Writes an `f64` array of the given shape (C order) as npy.
@@ -299,6 +362,74 @@ mod tests {
             "kept"
         );
         assert!(leftovers(&report).is_empty());
+    }
+
+    /// A folder standing where a new file goes stops the move before any file moves, with a usage
+    /// error naming it; an error while writing names the output, not its temporary path.
+    #[test]
+    fn clashes_are_refused_before_anything_moves() {
+        let dir = tempfile::tempdir().unwrap();
+        let report = dir.path().join("report");
+        std::fs::create_dir_all(report.join("z.md")).unwrap();
+        let e = write_folder(&report, |stage| {
+            write_atomic(&stage.join("a.md"), |w| writeln!(w, "a"))?;
+            write_atomic(&stage.join("z.md"), |w| writeln!(w, "z"))
+        })
+        .unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(
+            e.to_string()
+                .contains("a folder stands where the file goes"),
+            "{e}"
+        );
+        assert!(!report.join("a.md").exists());
+        assert!(leftovers(&report).is_empty());
+
+        let a = dir.path().join("a.csv");
+        let e = write_group(&[&a], |staged| {
+            Err::<(), _>(Error::io(
+                "write",
+                &staged(&a),
+                std::io::Error::other("disk full"),
+            ))
+        })
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains(&format!("cannot write {}: disk full", a.display())),
+            "{e}"
+        );
+        assert!(!e.contains(".anisospec-"), "{e}");
+    }
+
+    /// A report folder whose subfolder links to another file system (here /dev/shm, a tmpfs, where
+    /// the machine has one on another device) is still written: the file is copied across, then
+    /// renamed into place.
+    #[cfg(unix)]
+    #[test]
+    fn a_linked_subfolder_on_another_file_system_is_written() {
+        use std::os::unix::fs::MetadataExt;
+        let shm = Path::new("/dev/shm");
+        let dir = tempfile::tempdir().unwrap();
+        let Ok(meta) = std::fs::metadata(shm) else {
+            return;
+        };
+        if meta.dev() == std::fs::metadata(dir.path()).unwrap().dev() {
+            return;
+        }
+        let elsewhere = tempfile::tempdir_in(shm).unwrap();
+        let report = dir.path().join("report");
+        std::fs::create_dir_all(&report).unwrap();
+        std::os::unix::fs::symlink(elsewhere.path(), report.join("plots")).unwrap();
+        write_folder(&report, |stage| {
+            write_atomic(&stage.join("plots/a.png"), |w| writeln!(w, "a"))
+        })
+        .unwrap();
+        assert_eq!(
+            std::fs::read_to_string(elsewhere.path().join("a.png")).unwrap(),
+            "a\n"
+        );
+        assert!(leftovers(elsewhere.path()).is_empty());
     }
 
     /// An atomically written file, alone or in a group, has the mode a plain `File::create` gives (0666

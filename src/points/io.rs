@@ -32,9 +32,13 @@ impl Format {
 /// The largest npy header read: far beyond any real one (numpy pads them to 64-byte multiples).
 const MAX_NPY_HEADER: u64 = 1 << 20;
 
+/// The longest line of a text point file: a point's few coordinates take well under a hundred bytes.
+const MAX_LINE_BYTES: u64 = 1 << 16;
+
 /// Reads a point set from `.npy` or text, checking every value (see [`PointSets::new`]). A file
 /// holding more than [`super::MAX_COORDINATES`] coordinates is refused before it is read whole: an
-/// npy file by its size, a text file as soon as the count passes the limit.
+/// npy file by its size, a text file as soon as the count passes the limit (or a line runs past
+/// [`MAX_LINE_BYTES`]).
 pub fn read_points(path: &Path) -> Result<PointSets> {
     let format = Format::of(path)?;
     let file = std::fs::File::open(path).map_err(|e| Error::read_input(path, e))?;
@@ -51,8 +55,9 @@ pub fn read_points(path: &Path) -> Result<PointSets> {
             let limit = super::MAX_COORDINATES as u64 * 8 + MAX_NPY_HEADER;
             if len > limit {
                 return Err(named(Error::Input(format!(
-                    "{len} bytes, more than the {} float64 coordinates (2 GiB) a point set may hold; split it into several files",
-                    super::MAX_COORDINATES
+                    "{len} bytes, more than the {} float64 coordinates ({} GiB of data) a point set may hold; split it into several files",
+                    super::MAX_COORDINATES,
+                    (super::MAX_COORDINATES * 8) >> 30
                 ))));
             }
             let mut bytes = Vec::with_capacity(len as usize);
@@ -61,7 +66,11 @@ pub fn read_points(path: &Path) -> Result<PointSets> {
                 .map_err(|e| Error::read_input(path, e))?;
             parse_npy(&bytes)
         }
-        Format::Text => parse_text(std::io::BufReader::new(file), super::MAX_COORDINATES),
+        Format::Text => match parse_text(std::io::BufReader::new(file), super::MAX_COORDINATES) {
+            // A folder, or a failing disk: the message and exit code of any unreadable input.
+            Err(Error::Io { source, .. }) => return Err(Error::read_input(path, source)),
+            parsed => parsed,
+        },
     }
     .map_err(named)
 }
@@ -224,8 +233,9 @@ fn fortran_to_c(shape: &[usize], values: &[f64]) -> Vec<f64> {
     out
 }
 
-/// Parses the text format, refusing more than `limit` coordinates as soon as the count passes it. Bytes
-/// that are not UTF-8 are read as replacement characters (and then fail as numbers).
+/// Parses the text format, refusing more than `limit` coordinates as soon as the count passes it, and
+/// lines longer than [`MAX_LINE_BYTES`]. Bytes that are not UTF-8 are read as replacement characters
+/// (and then fail as numbers). A failure of the reader is an [`Error::Io`].
 fn parse_text(mut reader: impl BufRead, limit: usize) -> Result<PointSets> {
     let mut sets: Vec<Vec<f64>> = vec![Vec::new()];
     let mut dims: Option<usize> = None;
@@ -234,10 +244,21 @@ fn parse_text(mut reader: impl BufRead, limit: usize) -> Result<PointSets> {
     for line_no in 0.. {
         raw.clear();
         let read = reader
+            .by_ref()
+            .take(MAX_LINE_BYTES + 1)
             .read_until(b'\n', &mut raw)
-            .map_err(|e| Error::Input(format!("cannot read line {}: {e}", line_no + 1)))?;
+            .map_err(|source| Error::Io {
+                context: format!("cannot read line {}", line_no + 1),
+                source,
+            })?;
         if read == 0 {
             break;
+        }
+        if raw.len() as u64 > MAX_LINE_BYTES {
+            return Err(Error::Input(format!(
+                "line {} is longer than {MAX_LINE_BYTES} bytes; each line holds one point's coordinates",
+                line_no + 1
+            )));
         }
         let text = String::from_utf8_lossy(&raw);
         let line = text.trim();
@@ -432,6 +453,17 @@ mod tests {
         let e = read_points(&big).unwrap_err();
         assert_eq!(e.exit_code(), 2);
         assert!(e.to_string().contains("split it into several files"), "{e}");
-        assert_eq!(std::fs::metadata(&big).unwrap().len(), size);
+        // A text file with no line breaks is refused at its first line's limit, not read whole.
+        let endless = std::io::repeat(b'1').take(1 << 30);
+        let e = parse_text(std::io::BufReader::new(endless), 100)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 1 is longer than"), "{e}");
+        // A folder named like a point file keeps the message of any unreadable input.
+        let folder = dir.path().join("pts.txt");
+        std::fs::create_dir(&folder).unwrap();
+        let e = read_points(&folder).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("name a file, not a folder"), "{e}");
     }
 }

@@ -190,14 +190,17 @@ impl TableCache {
                 self.seconds
             );
         }
-        write_points(&path, &points)?;
         let sidecar = serde_json::json!({
             "key": key, "seconds": seconds, "target": source.display().to_string(),
             "sets_stopped_by_time_limit": timed_out,
         });
-        crate::output::write_atomic(&meta, |w| {
-            use std::io::Write;
-            writeln!(w, "{sidecar:#}")
+        // The table and its sidecar together, or neither.
+        crate::output::write_group(&[&path, &meta], |staged| {
+            write_points(&staged(&path), &points)?;
+            crate::output::write_atomic(&staged(&meta), |w| {
+                use std::io::Write;
+                writeln!(w, "{sidecar:#}")
+            })
         })?;
         Ok((load_table(&path, n)?, seconds))
     }

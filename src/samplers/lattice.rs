@@ -141,11 +141,7 @@ impl Sampler for Lattice {
         self.dims
     }
     fn check_n(&self, n: usize) -> std::result::Result<(), usize> {
-        if n <= LATTICE_MAX_N {
-            Ok(())
-        } else {
-            Err(LATTICE_MAX_N)
-        }
+        check_lattice_n(n)
     }
     fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64> {
         let z: Vec<u64> = generating_vector(n, self.dims)
@@ -199,14 +195,19 @@ impl Sampler for GivenLattice {
         self.z.len()
     }
     fn check_n(&self, n: usize) -> std::result::Result<(), usize> {
-        if n <= LATTICE_MAX_N {
-            Ok(())
-        } else {
-            Err(LATTICE_MAX_N)
-        }
+        check_lattice_n(n)
     }
     fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64> {
         shifted_lattice(&self.z, n, rng)
+    }
+}
+
+/// Any `n` up to [`LATTICE_MAX_N`], else that limit as the nearest valid `n`.
+fn check_lattice_n(n: usize) -> std::result::Result<(), usize> {
+    if n <= LATTICE_MAX_N {
+        Ok(())
+    } else {
+        Err(LATTICE_MAX_N)
     }
 }
 

@@ -11,16 +11,21 @@ use crate::error::{Error, Result};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+/// The folder a file `path` goes in: its parent, or `.` for a bare file name.
+fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
 /// Writes `path` atomically: `fill` writes into a temporary file in the same folder, which is renamed
 /// onto `path` only if `fill` succeeds. The file gets the permissions `File::create` would give it.
 pub fn write_atomic<F>(path: &Path, fill: F) -> Result<()>
 where
     F: FnOnce(&mut BufWriter<&mut std::fs::File>) -> std::io::Result<()>,
 {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
+    let dir = folder_of(path);
     if !dir.is_dir() {
         std::fs::create_dir_all(dir).map_err(|e| Error::io("create the folder", dir, e))?;
     }
@@ -56,10 +61,7 @@ pub fn write_group<T>(
     let mut folders: Vec<(PathBuf, tempfile::TempDir)> = Vec::new();
     let mut staged: Vec<(PathBuf, PathBuf)> = Vec::new();
     for out in outputs {
-        let dir = match out.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
+        let dir = folder_of(out).to_path_buf();
         let name = out
             .file_name()
             .ok_or_else(|| Error::Usage(format!("{}: give a file name", out.display())))?;
@@ -178,10 +180,7 @@ fn move_tree(from: &Path, to: &Path) -> Result<()> {
 fn move_file(from: &Path, to: &Path) -> Result<()> {
     match std::fs::rename(from, to) {
         Err(e) if e.kind() == std::io::ErrorKind::CrossesDevices => {
-            let dir = match to.parent() {
-                Some(d) if !d.as_os_str().is_empty() => d,
-                _ => Path::new("."),
-            };
+            let dir = folder_of(to);
             let copy = tempfile::Builder::new()
                 .prefix(".anisospec-")
                 .tempfile_in(dir)

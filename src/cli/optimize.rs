@@ -265,10 +265,16 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         })
     })?;
     for f in &fits {
-        eprintln!(
-            "{}: dark mean P {:.4} over {} cells, annular error max {:.4} (rms {:.4}) over {} sets",
-            f.proj, f.dark_mean, f.dark_cells, f.annular_max_error, f.annular_rms_error, f.sets
-        );
+        match f.variance_ratio {
+            Some(v) => eprintln!(
+                "{}: predicted variance {v:.4e} of random sampling's (over the fit radius), over {} sets",
+                f.proj, f.sets
+            ),
+            None => eprintln!(
+                "{}: dark mean P {:.4} over {} cells, annular error max {:.4} (rms {:.4}) over {} sets",
+                f.proj, f.dark_mean, f.dark_cells, f.annular_max_error, f.annular_rms_error, f.sets
+            ),
+        }
     }
     eprintln!(
         "wrote {} ({} sets of {} points in {}D, {:.1} s)",

@@ -2,7 +2,7 @@
 //! spectra gallery per sampler, and CSV / npy of every number.
 
 use super::config::{CompareConfig, GALLERY_SHEAR_RANGE};
-use super::tables::{frame_shear, start_sampler, table_frame, TableCache, TABLE_ITERATIONS};
+use super::tables::{moved, start_sampler, table_frame, TableCache, TABLE_ITERATIONS};
 use super::{instantiate, usable_n, Outcome, SamplerSpec, Study, SubjectInfo};
 use crate::converge::{plot, Convergence};
 use crate::error::Result;
@@ -686,11 +686,17 @@ fn write_tables(
                 continue;
             };
             let range = subject.shear_range;
-            let design = match Target::load(target).map(|t| table_frame(t, range)) {
+            let framed = Target::load(target).map(|t| table_frame(t, range));
+            let design = match &framed {
                 Ok(Target::DoubleWedge(d)) => {
                     format!("double wedge, slopes {:.2} to {:.2}", d.s0, d.s1)
                 }
                 Ok(Target::Hairline(_)) => "hairline band, unsheared".to_string(),
+                Ok(Target::Variance(v)) => format!(
+                    "variance of {} through shear {}",
+                    v.integrand,
+                    shear_text(v.shear)
+                ),
                 Ok(t) => t.kind().to_string(),
                 Err(e) => format!("({e})"),
             };
@@ -702,7 +708,8 @@ fn write_tables(
                 let each: Vec<String> = starts.iter().map(|(n, s)| format!("N={n}: {s}")).collect();
                 each.join(", ")
             };
-            let moved = if frame_shear(range) == 0.0 {
+            let is_moved = framed.as_ref().is_ok_and(|t| moved(t, range));
+            let moved_by = if !is_moved {
                 "not moved".to_string()
             } else {
                 format!(
@@ -713,7 +720,7 @@ fn write_tables(
             };
             write!(
                 w,
-                "| {} | {} | {design} | {start} | {moved} |",
+                "| {} | {} | {design} | {start} | {moved_by} |",
                 subject.label,
                 target.display()
             )?;

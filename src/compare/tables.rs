@@ -49,6 +49,13 @@ pub fn frame_shear(range: (f64, f64)) -> f64 {
     }
 }
 
+/// Whether a table of `target` for a subject whose shears span `range` is moved by the oracle's
+/// shear at use: a variance target always (it is designed for the shear it names, which stands for
+/// the oracle's), a shape target unless its frame shear is 0 (an in-focus layer).
+pub fn moved(target: &Target, range: (f64, f64)) -> bool {
+    matches!(target, Target::Variance(_)) || frame_shear(range) != 0.0
+}
+
 /// The target moved into the frame of [`frame_shear`] for a subject whose shears span `range`: a
 /// hairline becomes unsheared, a double wedge spans `range` minus the frame shear (at least
 /// [`MIN_WEDGE_HALF_WIDTH`] either side of its middle).
@@ -129,7 +136,7 @@ impl TableCache {
 
     /// The sampler of `target` at `n` points for a subject with oracle shear `shear` and shear range
     /// `range`, and the seconds its table took to optimize (when it was built, cached or not). The
-    /// table is moved by `shear`, or not at all when its frame shear is 0 (an in-focus layer).
+    /// table is moved by `shear`, or not at all (see [`moved`]).
     pub fn sampler(
         &self,
         target: &Path,
@@ -139,10 +146,10 @@ impl TableCache {
     ) -> Result<(Box<dyn Sampler>, f64)> {
         let framed = within_reach(table_frame(Target::load(target)?, range), n)?;
         let (table, seconds) = self.table(target, &framed, n)?;
-        let shear = if frame_shear(range) == 0.0 {
-            (0.0, 0.0)
-        } else {
+        let shear = if moved(&framed, range) {
             shear
+        } else {
+            (0.0, 0.0)
         };
         let sampler = Sheared::new(Box::new(table), shear.0, shear.1, ShearMode::Transported)?;
         Ok((Box::new(sampler), seconds))

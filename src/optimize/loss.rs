@@ -12,6 +12,9 @@
 //! row and column `−K/2` carry `W = 0`), `G = Σ_k W (P − T) F(k) 2πi (k1 + i k2) exp(+2πi k·x_j)` has
 //! `Re G = Σ … k1 …` and `Im G = Σ … k2 …`, both real sums; the gradient is `(4/N) (Re G, Im G)`.
 //!
+//! A variance target's grid ([`crate::targets::variance`]) makes the term linear: `L = Σ_k W(k) P(k)`,
+//! the predicted variance, whose gradient is the same transform with `W` in place of `2 W (P − T)`.
+//!
 //! Annular means (per term, optional): the fit criterion ([`super::metrics::Fit`]) compares the
 //! means of `P` and of `T` over the non-dark cells of each annulus `round(|k|) = r`
 //! ([`TargetGrid::annulus`]). The loss can add `λ_a / A · Σ_r m_r²`, `m_r` the mean residual `P − T`
@@ -141,8 +144,15 @@ impl Objective {
             if w == 0.0 {
                 continue;
             }
-            let r = power[idx] - g.target[idx];
-            loss += w * r * r;
+            // `r` is half of ∂(loss)/∂P over w: `P − T` for a shape, ½ for a variance target's `w P`.
+            let r = if g.variance {
+                loss += w * power[idx];
+                0.5
+            } else {
+                let r = power[idx] - g.target[idx];
+                loss += w * r * r;
+                r
+            };
             let pull = match g.annulus(idx) {
                 Some(a) if with_annuli => annular_pull[a],
                 _ => 0.0,

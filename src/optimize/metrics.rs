@@ -31,6 +31,9 @@ pub struct Fit {
     pub annular_rms_error: f64,
     /// Number of annuli compared.
     pub annuli: usize,
+    /// A variance target's predicted variance relative to random sampling's over the fit radius,
+    /// `Σ W P / Σ W` (1 for white noise; see [`crate::targets::variance`]); `None` for shape targets.
+    pub variance_ratio: Option<f64>,
 }
 
 /// The expected spectrum `mean_s P_s(k)` of `proj` over all sets, on the grid's `res × res` frequencies.
@@ -88,6 +91,13 @@ pub fn fit(points: &PointSets, proj: Projection, grid: &TargetGrid, method: Meth
         .filter(|(_, a)| a.2 >= MIN_ANNULUS_CELLS)
         .map(|(r, a)| (r, ((a.0 - a.1) / a.2 as f64).abs()))
         .collect();
+    let variance_ratio = grid.variance.then(|| {
+        let (wp, w) = p
+            .iter()
+            .zip(&grid.weight)
+            .fold((0.0, 0.0), |(wp, w), (pk, wk)| (wp + wk * pk, w + wk));
+        wp / w
+    });
     let annuli = errors.len();
     let (worst, annular_max_error) =
         errors
@@ -109,5 +119,6 @@ pub fn fit(points: &PointSets, proj: Projection, grid: &TargetGrid, method: Meth
         worst_radius: worst as f64 / (points.n() as f64).sqrt(),
         annular_rms_error,
         annuli,
+        variance_ratio,
     }
 }

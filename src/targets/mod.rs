@@ -13,15 +13,21 @@
 //! File format (one table, `kind` picks the shape, unknown keys are errors):
 //!
 //! ```toml
-//! kind = "double-wedge"   # or "hairline", "blue-noise", "image"
+//! kind = "double-wedge"   # or "hairline", "blue-noise", "image", "variance"
 //! s0 = 0.3                # dark between the lines k2 = s0 k1 and k2 = s1 k1 ...
 //! s1 = 0.7
 //! radius = 1.6            # ... up to |k| = radius * sqrt(N)
 //! ```
+//!
+//! A `variance` target ([`variance`]) is not a shape: its loss is the variance the set predicts for a
+//! family of integrands.
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+pub mod variance;
+pub use variance::Variance;
 
 /// The largest number of dark cells, in units of `N`, that a target may ask of `N` points.
 pub const REACH: f64 = 1.0;
@@ -147,6 +153,8 @@ pub enum Target {
     BlueNoise(BlueNoise),
     /// Loaded from an image (see [`Image`]).
     Image(Image),
+    /// The predicted variance of an integrand family (see [`Variance`]).
+    Variance(Variance),
 }
 
 /// A target laid out on a frequency grid for a given `N`: the values `T(k)`, the loss weights `W(k)`
@@ -173,6 +181,9 @@ pub struct TargetGrid {
     pub dark_cells: usize,
     /// Each cell's annulus (see [`TargetGrid::annulus`]).
     rings: Vec<Option<u32>>,
+    /// A variance target's grid: the loss is `Σ W P` (the predicted variance, [`variance`]), not
+    /// `Σ W (P − T)²`; `T` is unused, no cell is dark and there are no annuli.
+    pub variance: bool,
 }
 
 impl TargetGrid {
@@ -254,7 +265,7 @@ impl Target {
     pub fn parse(text: &str) -> Result<Self> {
         let target: Target = toml::from_str(text).map_err(|e| {
             Error::Input(format!(
-                "not a valid target: {}; a target file has kind = \"hairline\" | \"double-wedge\" | \"blue-noise\" | \"image\" and that kind's keys (see targets/*.toml)",
+                "not a valid target: {}; a target file has kind = \"hairline\" | \"double-wedge\" | \"blue-noise\" | \"image\" | \"variance\" and that kind's keys (see targets/*.toml)",
                 e.message()
             ))
         })?;
@@ -304,6 +315,7 @@ impl Target {
                 dark_weight(i.dark_weight)?;
                 falloff(i.falloff)?;
             }
+            Target::Variance(v) => v.validate()?,
         }
         Ok(())
     }
@@ -315,6 +327,7 @@ impl Target {
             Target::DoubleWedge(_) => "double-wedge",
             Target::BlueNoise(_) => "blue-noise",
             Target::Image(_) => "image",
+            Target::Variance(_) => "variance",
         }
     }
 
@@ -325,6 +338,7 @@ impl Target {
             Target::DoubleWedge(d) => d.radius.max(d.inner_radius),
             Target::BlueNoise(b) => b.radius,
             Target::Image(i) => i.extent * std::f64::consts::SQRT_2,
+            Target::Variance(v) => v.extent,
         }
     }
 
@@ -334,6 +348,7 @@ impl Target {
             Target::DoubleWedge(d) => d.dark_weight,
             Target::BlueNoise(b) => b.dark_weight,
             Target::Image(i) => i.dark_weight,
+            Target::Variance(_) => None,
         };
         w.unwrap_or(DEFAULT_DARK_WEIGHT)
     }
@@ -344,6 +359,7 @@ impl Target {
             Target::DoubleWedge(d) => d.falloff,
             Target::BlueNoise(b) => b.falloff,
             Target::Image(i) => i.falloff,
+            Target::Variance(_) => None,
         };
         a.unwrap_or(0.0)
     }
@@ -371,6 +387,8 @@ impl Target {
             Target::Image(i) => {
                 return 0.5 * (image_value(i, nu1, nu2) + image_value(i, -nu1, -nu2))
             }
+            // No shape: the loss is the predicted variance.
+            Target::Variance(_) => false,
         };
         if dark {
             0.0
@@ -385,8 +403,12 @@ impl Target {
     pub fn grid(&self, n: usize) -> Result<TargetGrid> {
         let sqrt_n = (n as f64).sqrt();
         let ext = self.extent() * sqrt_n;
-        // Fit a margin around the features so the energy they push out is kept flat too.
-        let fit_radius = (2.0 * ext).max(ext + sqrt_n).max(4.0);
+        // Fit a margin around the features so the energy they push out is kept flat too; a variance
+        // target's extent is its fit radius.
+        let fit_radius = match self {
+            Target::Variance(_) => ext.max(4.0),
+            _ => (2.0 * ext).max(ext + sqrt_n).max(4.0),
+        };
         self.grid_within(n, fit_radius)
     }
 
@@ -410,6 +432,7 @@ impl Target {
                 let dark = i.pixels.iter().filter(|&&v| v <= DARK_LEVEL).count();
                 dark as f64 / i.pixels.len().max(1) as f64 * (2.0 * i.extent).powi(2)
             }
+            Target::Variance(_) => 0.0,
         }
     }
 
@@ -442,6 +465,9 @@ impl Target {
             )));
         }
         let res = 2 * (fit_radius.ceil() as usize) + 2;
+        if let Target::Variance(v) = self {
+            return variance_grid(v, n, res, fit_radius);
+        }
         let half = (res / 2) as i64;
         let mut target = vec![1.0; res * res];
         let mut dark = vec![false; res * res];
@@ -520,6 +546,7 @@ impl Target {
             dark,
             dark_cells,
             rings: Vec::new(),
+            variance: false,
         };
         let annuli = grid.annuli();
         grid.rings = (0..res * res)
@@ -534,6 +561,42 @@ impl Target {
             .collect();
         Ok(grid)
     }
+}
+
+/// The grid of a variance target: `W = weight · |ĝ|² / Σ |ĝ|²` over the paired cells `0 < |k| ≤`
+/// `fit_radius`, 0 elsewhere (see [`variance`]).
+fn variance_grid(v: &Variance, n: usize, res: usize, fit_radius: f64) -> Result<TargetGrid> {
+    let power = v.spectrum(res)?;
+    let half = (res / 2) as i64;
+    let inside = |idx: usize| {
+        let (k1, k2) = ((idx % res) as i64 - half, (idx / res) as i64 - half);
+        k1 > -half && k2 > -half && (k1, k2) != (0, 0) && (k1 as f64).hypot(k2 as f64) <= fit_radius
+    };
+    let total: f64 = (0..res * res)
+        .filter(|&i| inside(i))
+        .map(|i| power[i])
+        .sum();
+    if total <= 0.0 {
+        return Err(Error::Input(format!(
+            "target integrand '{}' has no energy at 0 < |k| <= {fit_radius:.1} (N = {n}): it is constant there, so no set can lower its variance; give a larger extent or another integrand",
+            v.integrand
+        )));
+    }
+    let scale = v.weight() / total;
+    let weight = (0..res * res)
+        .map(|i| if inside(i) { power[i] * scale } else { 0.0 })
+        .collect();
+    Ok(TargetGrid {
+        n,
+        res,
+        fit_radius,
+        target: vec![0.0; res * res],
+        weight,
+        dark: vec![false; res * res],
+        dark_cells: 0,
+        rings: vec![None; res * res],
+        variance: true,
+    })
 }
 
 impl Target {

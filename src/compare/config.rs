@@ -95,6 +95,7 @@ impl CompareConfig {
                 PathBuf::from("targets/hairline.toml"),
                 PathBuf::from("targets/widened-hairline.toml"),
                 PathBuf::from("targets/double-wedge.toml"),
+                PathBuf::from("targets/fan-variance.toml"),
             ],
             table_sets: 16,
             table_seconds: 600.0,

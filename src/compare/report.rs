@@ -666,8 +666,9 @@ fn write_tables(
          target file ({TABLE_ITERATIONS} iterations from the start named, x and y held at the centres of its strata) and cached; \
          each estimate uses one set with a random toroidal shift. A table for a range that holds 0 is designed \
          in the frame of the in-focus layer and not moved; any other is designed around the range's centre \
-         and moved by the oracle's shear (seam-free). Set-up is the optimization time recorded when the table \
-         was built, also when it is read back from the cache.\n",
+         and moved by the oracle's shear (seam-free). A variance table is built once, for the integrand family \
+         and shear its file names, and moved by each integrand's oracle shear. Set-up is the optimization \
+         time recorded when the table was built, also when it is read back from the cache.\n",
         c.table_sets
     )?;
     write!(w, "| integrand | table | designed for | start | moved by |")?;

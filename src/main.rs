@@ -34,7 +34,8 @@ enum Command {
     Oracle(cli::oracle::OracleArgs),
     /// The xu and yv slice spectra of one pixel's integrand.
     PixelSpectrum(cli::pixel_spectrum::PixelSpectrumArgs),
-    /// Optimize point sets until their spectra match a target (widened hairline, double wedge, ...)
+    /// Optimize point sets until their spectra match a target (widened hairline, double wedge, ...) or
+    /// their predicted variance for a family of integrands is lowest,
     /// and write them as tables.
     Optimize(cli::optimize::OptimizeArgs),
     /// The main job: optimized, sheared and classical samplers compared on analytic integrands and

@@ -18,7 +18,8 @@ use std::time::Instant;
 /// Optimize point sets toward a target spectrum (DESIGN §6).
 #[derive(clap::Args, Debug, Clone)]
 pub struct OptimizeArgs {
-    /// Target spectrum: a TOML file (see targets/*.toml).
+    /// Target: a TOML file (see targets/*.toml): a spectrum shape (hairline, double-wedge, blue-noise,
+    /// image), or kind = "variance", the variance predicted for a family of integrands.
     #[arg(long)]
     pub target: PathBuf,
     /// Dimensions: 2 (the target on the set's two coordinates) or 4 (the target on xu and yv, xy and

@@ -195,6 +195,8 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         annular_weight: args.annular_weight,
     };
     let objective = setup.objective()?;
+    // The wider grid the fit is also judged on, checked before any work.
+    let wide = target.check_grid(args.n)?;
     let bar = if std::io::stderr().is_terminal() {
         let b = indicatif::ProgressBar::new(args.sets as u64);
         if let Ok(style) = indicatif::ProgressStyle::with_template(
@@ -218,7 +220,6 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     for term in &objective.terms {
         fits.push(metrics::fit(&points, term.proj, &term.grid, setup.method));
     }
-    let wide = target.check_grid(args.n)?;
     let wide_fit = metrics::fit(&points, objective.terms[0].proj, &wide, setup.method);
 
     let losses: Vec<f64> = reports.iter().map(|r| r.loss).collect();

@@ -437,10 +437,17 @@ impl Target {
     }
 
     /// The grid the fit is judged on: twice the fit radius of [`Target::grid`], so that energy pushed
-    /// just beyond the optimized range is seen.
+    /// just beyond the optimized range is seen (a variance target: at most the radius its largest
+    /// sampling grid allows, [`variance::MAX_SAMPLES`]` / 8 − 1` cells).
     pub fn check_grid(&self, n: usize) -> Result<TargetGrid> {
         let fit = self.grid(n)?.fit_radius;
-        self.grid_within(n, 2.0 * fit)
+        let wide = match self {
+            Target::Variance(_) => (2.0 * fit)
+                .min((variance::MAX_SAMPLES / 8 - 1) as f64)
+                .max(fit),
+            _ => 2.0 * fit,
+        };
+        self.grid_within(n, wide)
     }
 
     /// Like [`Target::grid`] but with the fit radius (in frequency cells) given: used to judge a fit

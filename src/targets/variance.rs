@@ -40,6 +40,9 @@ const PLACEMENT_SEED: u64 = 0x7661_7269_616e_6365;
 /// Smallest sampling grid side `M`.
 const MIN_SAMPLES: usize = 256;
 
+/// Largest sampling grid side `M` (256 MiB of complex samples), so largest loss grid `M / 4`.
+pub const MAX_SAMPLES: usize = 4096;
+
 /// A variance target: the loss is the predicted variance of `integrand` (see the module doc).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -124,10 +127,17 @@ impl Variance {
 
     /// `|ĝ(k)|²` averaged over the placements, on the `res × res` grid of DESIGN §3 (`[i * res + j]`,
     /// `k1 = j − res/2`, `k2 = i − res/2`), sampled on an `M × M` grid with `M` the smallest power of two
-    /// at least `max(256, 4 res)`.
+    /// at least `max(256, 4 res)`. Fails with `Error::Input` when `M` would exceed [`MAX_SAMPLES`].
     pub fn spectrum(&self, res: usize) -> Result<Vec<f64>> {
         let base = self.parsed()?;
         let samples = (4 * res).max(MIN_SAMPLES).next_power_of_two();
+        if samples > MAX_SAMPLES {
+            return Err(Error::Input(format!(
+                "the variance target's loss grid of {res} x {res} frequencies needs the integrand sampled on {samples} x {samples} points, more than the largest, {MAX_SAMPLES} x {MAX_SAMPLES}; lower its extent ({}) or N so that extent * sqrt(N) is at most {}",
+                self.extent,
+                MAX_SAMPLES / 8 - 1
+            )));
+        }
         self.spectrum_sampled(base.as_ref(), res, samples)
     }
 
@@ -277,6 +287,11 @@ mod tests {
         assert!(message(t.clone()).contains("'extent'"));
         t.extent = 1.0;
         t.weight = Some(-1.0);
-        assert!(message(t).contains("'weight'"));
+        assert!(message(t.clone()).contains("'weight'"));
+        // A loss grid too fine to sample is refused before any sampling.
+        t.weight = None;
+        let e = t.spectrum(MAX_SAMPLES / 4 + 2).unwrap_err();
+        assert!(e.to_string().contains("lower its extent"), "{e}");
+        assert_eq!(e.exit_code(), 2);
     }
 }

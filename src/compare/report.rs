@@ -662,11 +662,11 @@ fn write_tables(
     writeln!(w, "\n## Tables\n")?;
     writeln!(
         w,
-        "Each optimized sampler is a table of {} sets per N, built for one integrand's shear range from the \
-         target file ({TABLE_ITERATIONS} iterations from the start named, x and y held at the centres of its strata) and cached; \
-         each estimate uses one set with a random toroidal shift. A table for a range that holds 0 is designed \
-         in the frame of the in-focus layer and not moved; any other is designed around the range's centre \
-         and moved by the oracle's shear (seam-free). A variance table is built once, for the integrand family \
+        "Each optimized sampler is a table of {} sets per N, built from the target file ({TABLE_ITERATIONS} \
+         iterations from the start named, x and y held at the centres of its strata) and cached; each estimate \
+         uses one set with a random toroidal shift. A shape table is built for one integrand's shear range: for \
+         a range that holds 0 it is designed in the frame of the in-focus layer and not moved; for any other \
+         it is designed around the range's centre and moved by the oracle's shear (seam-free). A variance table is built once, for the integrand family \
          and shear its file names, and moved by each integrand's oracle shear. Set-up is the optimization \
          time recorded when the table was built, also when it is read back from the cache.\n",
         c.table_sets

@@ -1,11 +1,13 @@
 //! Optimized tables for the compare study: built for each target, shear range and N when missing,
 //! cached when present.
 //!
-//! Tables are designed in the frame of their *frame shear* (see [`frame_shear`]) — a widened hairline
-//! around the `k1` axis, a double wedge over the subject's shear range taken relative to it — and
-//! moved at use by the oracle's shear with the seam-free (transported) shear, which carries a pattern
-//! direction of slope `a` to slope `s + a`. One table then serves every depth, and the pattern never
-//! wraps across the pixel boundary (the seam that defeats the wrap-around shear, DESIGN §5).
+//! Shape tables are designed in the frame of their *frame shear* (see [`frame_shear`]) — a widened
+//! hairline around the `k1` axis, a double wedge over the subject's shear range taken relative to it —
+//! and moved at use by the oracle's shear with the seam-free (transported) shear, which carries a
+//! pattern direction of slope `a` to slope `s + a`. One table then serves every depth, and the pattern
+//! never wraps across the pixel boundary (the seam that defeats the wrap-around shear, DESIGN §5). A
+//! variance table is designed for the integrand family and shear its file names, built once per N,
+//! and moved by each subject's oracle shear (see [`moved`]).
 
 use super::config::CompareConfig;
 use crate::error::{Error, Result};
@@ -158,8 +160,15 @@ impl TableCache {
     /// The cached table, optimized and written first if missing or unreadable, and its optimization
     /// time. An unreadable cache file is rebuilt, with a warning, as the pixel references are.
     fn table(&self, source: &Path, target: &Target, n: usize) -> Result<(Table, f64)> {
+        // A variance target's Debug text holds its resolved defaults; how it is sampled has a version.
+        let sampling = match target {
+            Target::Variance(_) => {
+                format!("|sampling=v{}", crate::targets::variance::SAMPLING_VERSION)
+            }
+            _ => String::new(),
+        };
         let key = format!(
-            "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|annular={DEFAULT_ANNULAR_WEIGHT}|centred|start={}|v7",
+            "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|annular={DEFAULT_ANNULAR_WEIGHT}|centred|start={}|v7{sampling}",
             self.sets, self.seed, start_sampler(n)
         );
         let stem = source

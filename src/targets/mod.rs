@@ -1,9 +1,10 @@
 //! Target spectra for the optimizer (DESIGN §6), read from strict TOML files in `targets/`.
 //!
-//! A target is an expected power spectrum `T(k)` for one 2D projection, with `T = 0` in a *dark* region
-//! and `T = 1` elsewhere (image targets may hold any values `≥ 0`). Every length in a target file is a
-//! *normalized frequency* `ν = |k| / sqrt(N)`: a target means the same thing at every `N`, and its dark
-//! region holds about the same multiple of `N` frequency cells. A set of `N` points has `2N` degrees of
+//! A shape target is an expected power spectrum `T(k)` for one 2D projection, with `T = 0` in a *dark*
+//! region and `T = 1` elsewhere (image targets may hold any values `≥ 0`); a variance target
+//! ([`variance`]) is not a shape but the variance the set predicts for a family of integrands. Every
+//! length in a target file is a *normalized frequency* `ν = |k| / sqrt(N)`: a target means the same
+//! thing at every `N`, and its dark region holds about the same multiple of `N` frequency cells. A set of `N` points has `2N` degrees of
 //! freedom, and with `P` near 1 everywhere else, as a target asks, about `N` dark cells is what it can
 //! reach (N-rooks, for example, holds about `0.7 N` cells below `P = 0.1` along its two axes).
 //! [`Target::grid`] refuses targets darker than that and reports the reachable fraction. Sets that pay
@@ -18,9 +19,6 @@
 //! s1 = 0.7
 //! radius = 1.6            # ... up to |k| = radius * sqrt(N)
 //! ```
-//!
-//! A `variance` target ([`variance`]) is not a shape: its loss is the variance the set predicts for a
-//! family of integrands.
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -174,6 +172,7 @@ pub struct TargetGrid {
     /// to a dark one, where pushed-out energy piles up first), `1 / (other cells)` on the others inside
     /// the fit radius, 0 at `k = 0`, on the unpaired row and column `−K/2`, and beyond the fit radius.
     /// The loss is then `dark_weight ×` (mean squared error over dark and rim) `+` (the same elsewhere).
+    /// A variance target's: `weight · |ĝ(k)|² / Σ |ĝ|²` inside the fit radius, 0 at the same places.
     pub weight: Vec<f64>,
     /// Dark cells (`T ≤` [`DARK_LEVEL`]) inside the fit radius, excluding `k = 0`.
     pub dark: Vec<bool>,
@@ -270,7 +269,10 @@ impl Target {
             ))
         })?;
         target.validate()?;
-        Ok(target)
+        Ok(match target {
+            Target::Variance(v) => Target::Variance(v.resolved()),
+            shape => shape,
+        })
     }
 
     /// Checks every parameter (finite, widths and radii `≥ 0`, `s0 ≤ s1`).
@@ -364,7 +366,8 @@ impl Target {
         a.unwrap_or(0.0)
     }
 
-    /// `T` at the normalized frequency `(ν1, ν2) = k / sqrt(N)`.
+    /// `T` at the normalized frequency `(ν1, ν2) = k / sqrt(N)` (1 everywhere for a variance target,
+    /// which has no shape).
     pub fn value(&self, nu1: f64, nu2: f64) -> f64 {
         let r = nu1.hypot(nu2);
         let dark = match self {
@@ -583,13 +586,13 @@ fn variance_grid(v: &Variance, n: usize, res: usize, fit_radius: f64) -> Result<
         .filter(|&i| inside(i))
         .map(|i| power[i])
         .sum();
-    if total <= 0.0 {
+    let scale = v.weight() / total;
+    if !(total > 0.0 && scale.is_finite()) {
         return Err(Error::Input(format!(
-            "target integrand '{}' has no energy at 0 < |k| <= {fit_radius:.1} (N = {n}): it is constant there, so no set can lower its variance; give a larger extent or another integrand",
+            "target integrand '{}' shows no energy at 0 < |k| <= {fit_radius:.1} (N = {n}) on the grid it is sampled on: it is constant there or its features are smaller than the grid's cells, so no set can lower its variance; give a larger feature, a larger extent or another integrand",
             v.integrand
         )));
     }
-    let scale = v.weight() / total;
     let weight = (0..res * res)
         .map(|i| if inside(i) { power[i] * scale } else { 0.0 })
         .collect();
@@ -597,7 +600,7 @@ fn variance_grid(v: &Variance, n: usize, res: usize, fit_radius: f64) -> Result<
         n,
         res,
         fit_radius,
-        target: vec![0.0; res * res],
+        target: vec![1.0; res * res],
         weight,
         dark: vec![false; res * res],
         dark_cells: 0,

@@ -21,6 +21,8 @@ use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 use rustfft::FftPlanner;
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// Default number of random placements averaged (see [`Variance::placements`]).
 pub const DEFAULT_PLACEMENTS: usize = 32;
@@ -34,6 +36,13 @@ pub const MAX_PLACEMENTS: usize = 1024;
 /// where a weight 100 times smaller let the strata double it.
 pub const DEFAULT_VARIANCE_WEIGHT: f64 = 5000.0;
 
+/// Largest loss weight: far larger weights overflow the solver's line search.
+pub const MAX_VARIANCE_WEIGHT: f64 = 1e8;
+
+/// The version of how `|ĝ|²` is sampled (placement seed, grid size rule): part of compare's table
+/// cache key, so change it whenever either changes.
+pub const SAMPLING_VERSION: u32 = 1;
+
 /// The seed of the placements' random streams: part of the target's definition, not of the run.
 const PLACEMENT_SEED: u64 = 0x7661_7269_616e_6365;
 
@@ -43,6 +52,10 @@ const MIN_SAMPLES: usize = 256;
 /// Largest sampling grid side `M` (256 MiB of complex samples), so largest loss grid `M / 4`.
 pub const MAX_SAMPLES: usize = 4096;
 
+/// Largest number of integrand evaluations, placements × `M²`, one spectrum may take (about a minute
+/// on 2 cores).
+pub const MAX_EVALUATIONS: usize = 1 << 30;
+
 /// A variance target: the loss is the predicted variance of `integrand` (see the module doc).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -50,23 +63,28 @@ pub struct Variance {
     /// A 2D integrand (the syntax of `anisospec integrands`, without `@proj`), e.g.
     /// `fan:s0=0.3,s1=0.7`. In 4D it stands in both `xu` and `yv`.
     pub integrand: String,
-    /// The seam-free shear the set is moved by at use (the oracle's shear; 0 for none).
+    /// The seam-free shear the set is moved by at use (the oracle's shear; 0 for none). A 4D table
+    /// is moved by it in `xu` and `yv` (`--shear`, compare); a 2D set is not sheared by anisospec at
+    /// use, so a 2D design with a shear is for a renderer that applies
+    /// [`crate::points::shear::shear_pair`] itself.
     #[serde(default)]
     pub shear: f64,
     /// Random placements of the family (the integrand's own random placement, e.g. a fan's offset)
     /// averaged into `|ĝ|²` (default [`DEFAULT_PLACEMENTS`]); 0 takes the integrand as written.
     #[serde(default)]
     pub placements: Option<usize>,
-    /// Fit radius in normalized frequency `|k| / sqrt(N)`.
+    /// Fit radius in normalized frequency `|k| / sqrt(N)` (at least 4 frequency cells).
     pub extent: f64,
-    /// Loss weight against the repulsion and the 4D strata (default [`DEFAULT_VARIANCE_WEIGHT`]).
+    /// Loss weight against the repulsion and the 4D strata (default [`DEFAULT_VARIANCE_WEIGHT`], at
+    /// most [`MAX_VARIANCE_WEIGHT`]).
     #[serde(default)]
     pub weight: Option<f64>,
 }
 
 impl Variance {
     /// Checks the parameters: a 2D integrand that parses, a finite shear within
-    /// [`MAX_SHEAR`], `0 < extent`, at most [`MAX_PLACEMENTS`] placements, `weight > 0`.
+    /// [`MAX_SHEAR`], `0 < extent`, at most [`MAX_PLACEMENTS`] placements,
+    /// `0 < weight ≤` [`MAX_VARIANCE_WEIGHT`].
     pub fn validate(&self) -> Result<()> {
         let f = self.parsed()?;
         if f.dims() != 2 {
@@ -95,12 +113,20 @@ impl Variance {
             )));
         }
         let w = self.weight();
-        if !(w.is_finite() && w > 0.0) {
+        if !(w.is_finite() && w > 0.0 && w <= MAX_VARIANCE_WEIGHT) {
             return Err(Error::Input(format!(
-                "target parameter 'weight' is {w}; it must be a finite number > 0"
+                "target parameter 'weight' is {w}; give a number > 0 and at most {MAX_VARIANCE_WEIGHT:e} (larger weights overflow the solver's line search)"
             )));
         }
         Ok(())
+    }
+
+    /// The same target with every default written out (placements and weight), so that its
+    /// `Debug` text, which keys compare's table cache, and its JSON name what was used.
+    pub fn resolved(mut self) -> Self {
+        self.placements = Some(self.placements());
+        self.weight = Some(self.weight());
+        self
     }
 
     /// Placements averaged (0: the integrand as written).
@@ -127,9 +153,10 @@ impl Variance {
 
     /// `|ĝ(k)|²` averaged over the placements, on the `res × res` grid of DESIGN §3 (`[i * res + j]`,
     /// `k1 = j − res/2`, `k2 = i − res/2`), sampled on an `M × M` grid with `M` the smallest power of two
-    /// at least `max(256, 4 res)`. Fails with `Error::Input` when `M` would exceed [`MAX_SAMPLES`].
-    pub fn spectrum(&self, res: usize) -> Result<Vec<f64>> {
-        let base = self.parsed()?;
+    /// at least `max(256, 4 res)`. Fails with `Error::Input` when `M` would exceed [`MAX_SAMPLES`] or
+    /// the placements' evaluations [`MAX_EVALUATIONS`]. Computed once per process for each target
+    /// and `res`, then shared.
+    pub fn spectrum(&self, res: usize) -> Result<Arc<Vec<f64>>> {
         let samples = (4 * res).max(MIN_SAMPLES).next_power_of_two();
         if samples > MAX_SAMPLES {
             return Err(Error::Input(format!(
@@ -138,7 +165,25 @@ impl Variance {
                 MAX_SAMPLES / 8 - 1
             )));
         }
-        self.spectrum_sampled(base.as_ref(), res, samples)
+        let evaluations = self.placements().max(1).saturating_mul(samples * samples);
+        if evaluations > MAX_EVALUATIONS {
+            return Err(Error::Input(format!(
+                "the variance target would evaluate its integrand {evaluations:.3e} times ({} placements on {samples} x {samples} points), more than {MAX_EVALUATIONS:.3e}; lower its placements or its extent",
+                self.placements()
+            )));
+        }
+        static MEMO: OnceLock<Mutex<HashMap<String, Arc<Vec<f64>>>>> = OnceLock::new();
+        let key = format!("{self:?}|{res}");
+        let memo = MEMO.get_or_init(|| Mutex::new(HashMap::new()));
+        if let Some(found) = memo.lock().expect("memo lock").get(&key) {
+            return Ok(Arc::clone(found));
+        }
+        let base = self.parsed()?;
+        let spectrum = Arc::new(self.spectrum_sampled(base.as_ref(), res, samples)?);
+        memo.lock()
+            .expect("memo lock")
+            .insert(key, Arc::clone(&spectrum));
+        Ok(spectrum)
     }
 
     fn spectrum_sampled(&self, base: &dyn Integrand, res: usize, m: usize) -> Result<Vec<f64>> {
@@ -293,5 +338,12 @@ mod tests {
         let e = t.spectrum(MAX_SAMPLES / 4 + 2).unwrap_err();
         assert!(e.to_string().contains("lower its extent"), "{e}");
         assert_eq!(e.exit_code(), 2);
+        // So is one that would take too many evaluations.
+        t.placements = Some(MAX_PLACEMENTS);
+        let e = t.spectrum(MAX_SAMPLES / 4).unwrap_err();
+        assert!(e.to_string().contains("lower its placements"), "{e}");
+        t.placements = Some(0);
+        t.weight = Some(1e300);
+        assert!(message(t).contains("'weight'"));
     }
 }

@@ -136,43 +136,52 @@ fn folder_in_the_way(out: &Path) -> Error {
     ))
 }
 
-/// Checks, before anything moves, that every file under `from` can go to the same place under `to`:
-/// no folder where a file goes, no file where a folder goes.
-fn check_tree(from: &Path, to: &Path) -> Result<()> {
+/// Calls `visit(path, target, is_folder)` for every entry under `from`, with `target` its place
+/// under `to`, a folder before its contents.
+fn walk_tree(
+    from: &Path,
+    to: &Path,
+    visit: &mut dyn FnMut(&Path, &Path, bool) -> Result<()>,
+) -> Result<()> {
     let entries = std::fs::read_dir(from).map_err(|e| Error::io("read the folder", from, e))?;
     for entry in entries {
         let entry = entry.map_err(|e| Error::io("read the folder", from, e))?;
         let (path, target) = (entry.path(), to.join(entry.file_name()));
-        if path.is_dir() {
-            if target.exists() && !target.is_dir() {
-                return Err(Error::Usage(format!(
-                    "cannot write into {}: a file stands where the folder goes; move it away or choose another output folder",
-                    target.display()
-                )));
-            }
-            check_tree(&path, &target)?;
-        } else if target.is_dir() {
-            return Err(folder_in_the_way(&target));
+        let is_folder = path.is_dir();
+        visit(&path, &target, is_folder)?;
+        if is_folder {
+            walk_tree(&path, &target, visit)?;
         }
     }
     Ok(())
 }
 
+/// Checks, before anything moves, that every file under `from` can go to the same place under `to`:
+/// no folder where a file goes, no file where a folder goes.
+fn check_tree(from: &Path, to: &Path) -> Result<()> {
+    walk_tree(from, to, &mut |_, target, is_folder| {
+        if is_folder && target.exists() && !target.is_dir() {
+            return Err(Error::Usage(format!(
+                "cannot write into {}: a file stands where the folder goes; move it away or choose another output folder",
+                target.display()
+            )));
+        }
+        if !is_folder && target.is_dir() {
+            return Err(folder_in_the_way(target));
+        }
+        Ok(())
+    })
+}
+
 /// Moves every file under `from` to the same place under `to`, creating subfolders as needed.
 fn move_tree(from: &Path, to: &Path) -> Result<()> {
-    let entries = std::fs::read_dir(from).map_err(|e| Error::io("read the folder", from, e))?;
-    for entry in entries {
-        let entry = entry.map_err(|e| Error::io("read the folder", from, e))?;
-        let (path, target) = (entry.path(), to.join(entry.file_name()));
-        if path.is_dir() {
-            std::fs::create_dir_all(&target)
-                .map_err(|e| Error::io("create the folder", &target, e))?;
-            move_tree(&path, &target)?;
+    walk_tree(from, to, &mut |path, target, is_folder| {
+        if is_folder {
+            std::fs::create_dir_all(target).map_err(|e| Error::io("create the folder", target, e))
         } else {
-            move_file(&path, &target)?;
+            move_file(path, target)
         }
-    }
-    Ok(())
+    })
 }
 
 /// Renames `from` onto `to`; where `to` lies on another file system (a linked subfolder), copies it

@@ -4,9 +4,9 @@
 //! region and `T = 1` elsewhere (image targets may hold any values `≥ 0`); a variance target
 //! ([`variance`]) is not a shape but the variance the set predicts for a family of integrands. Every
 //! length in a target file is a *normalized frequency* `ν = |k| / sqrt(N)`: a target means the same
-//! thing at every `N`, and its dark region holds about the same multiple of `N` frequency cells. A set of `N` points has `2N` degrees of
-//! freedom, and with `P` near 1 everywhere else, as a target asks, about `N` dark cells is what it can
-//! reach (N-rooks, for example, holds about `0.7 N` cells below `P = 0.1` along its two axes).
+//! thing at every `N`, and its dark region holds about the same multiple of `N` frequency cells. A set
+//! of `N` points has `2N` degrees of freedom, and with `P` near 1 everywhere else, as a target asks,
+//! about `N` dark cells is what it can reach (N-rooks, for example, holds about `0.7 N` cells below `P = 0.1` along its two axes).
 //! [`Target::grid`] refuses targets darker than that and reports the reachable fraction. Sets that pay
 //! for darkness with peaks darken far more: a rank-1 lattice is dark everywhere but on its dual lattice,
 //! where `P = N` ([`crate::samplers::lattice`]).

@@ -3,13 +3,14 @@
 
 use crate::error::{Error, Result};
 use crate::optimize::{
-    self, loss::Repulsion, metrics, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
+    self, lattice_design, loss::Repulsion, metrics, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
 };
 use crate::output::{check_outputs, write_atomic, write_group};
 use crate::points::io::write_points;
 use crate::points::PointSets;
 use crate::samplers;
 use crate::spectrum::Method;
+use crate::targets::variance::Design;
 use crate::targets::Target;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -19,7 +20,10 @@ use std::time::Instant;
 #[derive(clap::Args, Debug, Clone)]
 pub struct OptimizeArgs {
     /// Target: a TOML file (see targets/*.toml): a spectrum shape (hairline, double-wedge, blue-noise,
-    /// image), or kind = "variance", the variance predicted for a family of integrands.
+    /// image), or kind = "variance", the variance predicted for a family of integrands. A variance
+    /// target with design = "lattice" is met by a search over rank-1 lattices instead of by moving
+    /// points: every set is the lattice of lowest predicted variance, and --init, --latin, the
+    /// solver's limits and the loss weights do not apply.
     #[arg(long)]
     pub target: PathBuf,
     /// Dimensions: 2 (the target on the set's two coordinates) or 4 (the target on xu and yv, xy and
@@ -197,23 +201,22 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     let objective = setup.objective()?;
     // The wider grid the fit is also judged on, checked before any work.
     let wide = target.check_grid(args.n)?;
-    let bar = if std::io::stderr().is_terminal() {
-        let b = indicatif::ProgressBar::new(args.sets as u64);
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "optimize {bar:30} {pos}/{len} sets [{elapsed_precise} < {eta}] {msg}",
-        ) {
-            b.set_style(style);
-        }
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
     let t0 = Instant::now();
-    let (points, reports) = optimize::optimize_sets(&setup, args.sets, args.seed, &|r| {
-        bar.set_message(format!("set {} loss {:.3e}", r.set, r.loss));
-        bar.inc(1);
-    })?;
-    bar.finish_and_clear();
+    let (points, reports, lattice) = match &target {
+        Target::Variance(v) if v.design() == Design::Lattice => {
+            eprintln!(
+                "searching the rank-1 lattices of {} points for the lowest predicted variance",
+                args.n
+            );
+            let design = lattice_design::design(v, args.n, args.dims)?;
+            let points = PointSets::from_sets(args.dims, vec![design.points(); args.sets])?;
+            (points, Vec::new(), Some(design))
+        }
+        _ => {
+            let (points, reports) = optimize_with_bar(&setup, args)?;
+            (points, reports, None)
+        }
+    };
     let seconds = t0.elapsed().as_secs_f64();
 
     let mut fits = Vec::new();
@@ -222,7 +225,11 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     }
     let wide_fit = metrics::fit(&points, objective.terms[0].proj, &wide, setup.method);
 
-    let losses: Vec<f64> = reports.iter().map(|r| r.loss).collect();
+    let losses: Vec<f64> = match &lattice {
+        // Every set is the same lattice.
+        Some(design) => vec![objective.evaluate(&design.points()).loss],
+        None => reports.iter().map(|r| r.loss).collect(),
+    };
     let sidecar = serde_json::json!({
         "target_file": args.target,
         "target": target,
@@ -241,6 +248,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         "fit": fits,
         "fit_twice_the_radius": wide_fit,
         "sets": reports,
+        "lattice": lattice,
         "seconds": seconds,
     });
     let text = serde_json::to_string_pretty(&sidecar)
@@ -278,6 +286,15 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             ),
         }
     }
+    if let Some(d) = &lattice {
+        eprintln!(
+            "lattice z = {:?}: predicted variance {:.4e}, {:.4e} of random sampling's (over |k| < {}); every set is this lattice",
+            d.generator,
+            d.predicted_variance,
+            d.variance_ratio,
+            d.search_res / 2
+        );
+    }
     eprintln!(
         "wrote {} ({} sets of {} points in {}D, {:.1} s)",
         outputs[0].display(),
@@ -287,6 +304,30 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         seconds
     );
     Ok(())
+}
+
+/// Optimizes the sets of `setup`, with a progress bar over sets when stderr is a terminal.
+fn optimize_with_bar(
+    setup: &Setup,
+    args: &OptimizeArgs,
+) -> Result<(PointSets, Vec<optimize::SetReport>)> {
+    let bar = if std::io::stderr().is_terminal() {
+        let b = indicatif::ProgressBar::new(args.sets as u64);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "optimize {bar:30} {pos}/{len} sets [{elapsed_precise} < {eta}] {msg}",
+        ) {
+            b.set_style(style);
+        }
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let out = optimize::optimize_sets(setup, args.sets, args.seed, &|r| {
+        bar.set_message(format!("set {} loss {:.3e}", r.set, r.loss));
+        bar.inc(1);
+    });
+    bar.finish_and_clear();
+    out
 }
 
 /// A C header with the same numbers as the npy table: `double NAME[sets][n][dims]`.

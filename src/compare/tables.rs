@@ -13,13 +13,15 @@ use super::config::CompareConfig;
 use crate::error::{Error, Result};
 use crate::optimize::solver::TIME_LIMIT_STOP;
 use crate::optimize::{
-    optimize_sets, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT, DEFAULT_REPULSION,
+    lattice_design, optimize_sets, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT, DEFAULT_REPULSION,
 };
 use crate::points::io::write_points;
 use crate::points::shear::ShearMode;
+use crate::points::PointSets;
 use crate::samplers::table::Table;
 use crate::samplers::{Sampler, Sheared};
 use crate::spectrum::Method;
+use crate::targets::variance::Design;
 use crate::targets::Target;
 use std::path::{Path, PathBuf};
 
@@ -160,11 +162,18 @@ impl TableCache {
     /// The cached table, optimized and written first if missing or unreadable, and its optimization
     /// time. An unreadable cache file is rebuilt, with a warning, as the pixel references are.
     fn table(&self, source: &Path, target: &Target, n: usize) -> Result<(Table, f64)> {
-        // A variance target's Debug text holds its resolved defaults; how it is sampled has a version.
+        // A variance target's Debug text holds its resolved defaults; how it is sampled has a version,
+        // and a lattice design the grid it searched over.
         let sampling = match target {
-            Target::Variance(_) => {
-                format!("|sampling=v{}", crate::targets::variance::SAMPLING_VERSION)
-            }
+            Target::Variance(v) => format!(
+                "|sampling=v{}{}",
+                crate::targets::variance::SAMPLING_VERSION,
+                if v.design() == Design::Lattice {
+                    format!("|lattice-search={}", lattice_design::SEARCH_RES)
+                } else {
+                    String::new()
+                }
+            ),
             _ => String::new(),
         };
         let key = format!(
@@ -188,10 +197,38 @@ impl TableCache {
                 }
             }
         }
-        let setup = table_setup(target.clone(), n, self.seconds);
         let started = std::time::Instant::now();
-        let (points, reports) = optimize_sets(&setup, self.sets, self.seed, &|_| {})?;
+        let (points, timed_out) = match target {
+            Target::Variance(v) if v.design() == Design::Lattice => {
+                let design = lattice_design::design(v, n, 4)?;
+                (
+                    PointSets::from_sets(4, vec![design.points(); self.sets])?,
+                    0,
+                )
+            }
+            _ => self.optimized(source, target, n)?,
+        };
         let seconds = started.elapsed().as_secs_f64();
+        let sidecar = serde_json::json!({
+            "key": key, "seconds": seconds, "target": source.display().to_string(),
+            "sets_stopped_by_time_limit": timed_out,
+        });
+        // The table and its sidecar together, or neither.
+        crate::output::write_group(&[&path, &meta], |staged| {
+            write_points(&staged(&path), &points)?;
+            crate::output::write_atomic(&staged(&meta), |w| {
+                use std::io::Write;
+                writeln!(w, "{sidecar:#}")
+            })
+        })?;
+        Ok((load_table(&path, n)?, seconds))
+    }
+
+    /// The table's sets moved by the optimizer, and how many stopped at the time limit (with a
+    /// warning).
+    fn optimized(&self, source: &Path, target: &Target, n: usize) -> Result<(PointSets, usize)> {
+        let setup = table_setup(target.clone(), n, self.seconds);
+        let (points, reports) = optimize_sets(&setup, self.sets, self.seed, &|_| {})?;
         let timed_out = reports
             .iter()
             .filter(|r| r.stop.starts_with(TIME_LIMIT_STOP))
@@ -206,19 +243,7 @@ impl TableCache {
                 self.seconds
             );
         }
-        let sidecar = serde_json::json!({
-            "key": key, "seconds": seconds, "target": source.display().to_string(),
-            "sets_stopped_by_time_limit": timed_out,
-        });
-        // The table and its sidecar together, or neither.
-        crate::output::write_group(&[&path, &meta], |staged| {
-            write_points(&staged(&path), &points)?;
-            crate::output::write_atomic(&staged(&meta), |w| {
-                use std::io::Write;
-                writeln!(w, "{sidecar:#}")
-            })
-        })?;
-        Ok((load_table(&path, n)?, seconds))
+        Ok((points, timed_out))
     }
 }
 

@@ -15,6 +15,7 @@
 
 pub mod fourier;
 pub mod latin;
+pub mod lattice_design;
 pub mod loss;
 pub mod metrics;
 pub mod solver;

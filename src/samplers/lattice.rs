@@ -48,7 +48,8 @@ pub fn shortest_dual_squared(n: usize, g: usize) -> u128 {
     }
 }
 
-fn gcd(mut a: usize, mut b: usize) -> usize {
+/// The greatest common divisor of `a` and `b`.
+pub(crate) fn gcd(mut a: usize, mut b: usize) -> usize {
     while b != 0 {
         (a, b) = (b, a % b);
     }

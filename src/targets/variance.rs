@@ -79,6 +79,21 @@ pub struct Variance {
     /// most [`MAX_VARIANCE_WEIGHT`]).
     #[serde(default)]
     pub weight: Option<f64>,
+    /// How a table is made for this target (default [`Design::Points`]).
+    #[serde(default)]
+    pub design: Option<Design>,
+}
+
+/// How a table is made for a variance target.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Design {
+    /// The optimizer moves the points of each set to lower the loss (the other keys above).
+    #[default]
+    Points,
+    /// A search over the rank-1 lattices of N points for the generating vector whose predicted
+    /// variance is lowest ([`crate::optimize::lattice_design`]); `extent` and `weight` do not apply.
+    Lattice,
 }
 
 impl Variance {
@@ -121,12 +136,18 @@ impl Variance {
         Ok(())
     }
 
-    /// The same target with every default written out (placements and weight), so that its
+    /// The same target with every default written out (placements, weight and design), so that its
     /// `Debug` text, which keys compare's table cache, and its JSON name what was used.
     pub fn resolved(mut self) -> Self {
         self.placements = Some(self.placements());
         self.weight = Some(self.weight());
+        self.design = Some(self.design());
         self
+    }
+
+    /// How a table is made for this target.
+    pub fn design(&self) -> Design {
+        self.design.unwrap_or_default()
     }
 
     /// Placements averaged (0: the integrand as written).
@@ -262,6 +283,7 @@ mod tests {
             placements: Some(placements),
             extent: 1.0,
             weight: None,
+            design: None,
         }
     }
 

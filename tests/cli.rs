@@ -918,3 +918,74 @@ fn gallery_writes_every_sampler() {
         assert!(gallery.join(sheet).exists(), "{sheet}");
     }
 }
+
+/// A variance target with `design = "lattice"`: `optimize` writes the searched lattice as every set
+/// (each coordinate at its strata's centres) and names its generating vector and predicted variance in
+/// the sidecar. A shape target with the key is refused.
+#[test]
+fn lattice_designs_are_written_as_tables() {
+    let (dir, out) = tmp("fan.npy");
+    let target = dir.path().join("fan.toml");
+    std::fs::write(
+        &target,
+        "kind = \"variance\"\nintegrand = \"fan:s0=0.3,s1=0.7\"\nshear = 0.5\nplacements = 2\nextent = 2.0\ndesign = \"lattice\"\n",
+    )
+    .unwrap();
+    let o = anisospec(&[
+        "optimize",
+        "--target",
+        target.to_str().unwrap(),
+        "--dims",
+        "4",
+        "-n",
+        "64",
+        "--sets",
+        "3",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("lattice z = ["), "{err}");
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.with_extension("json")).unwrap())
+            .unwrap();
+    let z: Vec<usize> = sidecar["lattice"]["generator"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap() as usize)
+        .collect();
+    assert_eq!((z.len(), z[0]), (4, 1), "{z:?}");
+    let ratio = sidecar["lattice"]["variance_ratio"].as_f64().unwrap();
+    assert!(ratio > 0.0 && ratio < 1.0, "{ratio}");
+    let table = anisospec::points::io::read_points(&out).unwrap();
+    assert_eq!(table.sets(), 3);
+    for s in 0..3 {
+        for (i, p) in table.set(s).chunks_exact(4).enumerate() {
+            for (c, zd) in p.iter().zip(&z) {
+                assert_eq!(*c, ((i * zd % 64) as f64 + 0.5) / 64.0);
+            }
+        }
+    }
+    let shape = dir.path().join("shape.toml");
+    std::fs::write(
+        &shape,
+        "kind = \"blue-noise\"\nradius = 0.4\ndesign = \"lattice\"\n",
+    )
+    .unwrap();
+    let other = dir.path().join("other.npy");
+    rejects(
+        &[
+            "optimize",
+            "--target",
+            shape.to_str().unwrap(),
+            "-n",
+            "16",
+            "-o",
+            other.to_str().unwrap(),
+        ],
+        "unknown field",
+        &other,
+    );
+}

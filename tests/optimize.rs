@@ -185,7 +185,10 @@ const SHIPPED_TARGETS: [&str; 5] = [
 
 #[test]
 fn target_files_are_strict() {
-    for name in SHIPPED_TARGETS.iter().chain(&["fan-variance.toml"]) {
+    for name in SHIPPED_TARGETS
+        .iter()
+        .chain(&["fan-variance.toml", "fan-lattice.toml"])
+    {
         let t = Target::load(&shipped(name)).unwrap();
         for n in [64, 256, 1024, 4096] {
             t.grid(n).unwrap_or_else(|e| panic!("{name} at N={n}: {e}"));
@@ -237,6 +240,14 @@ fn target_files_are_strict() {
         (
             "kind = \"variance\"\nintegrand = \"fan\"\nextent = -1\n",
             "'extent'",
+        ),
+        (
+            "kind = \"variance\"\nintegrand = \"fan\"\nextent = 1\ndesign = \"grid\"\n",
+            "unknown variant",
+        ),
+        (
+            "kind = \"hairline\"\nshear = 0.5\nhalf_width = 0.1\nlength = 1\ndesign = \"lattice\"\n",
+            "unknown field",
         ),
     ];
     for (text, needle) in cases {

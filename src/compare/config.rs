@@ -96,6 +96,7 @@ impl CompareConfig {
                 PathBuf::from("targets/widened-hairline.toml"),
                 PathBuf::from("targets/double-wedge.toml"),
                 PathBuf::from("targets/fan-variance.toml"),
+                PathBuf::from("targets/fan-lattice.toml"),
             ],
             table_sets: 16,
             table_seconds: 600.0,

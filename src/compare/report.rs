@@ -12,6 +12,7 @@ use crate::output::{write_atomic, write_npy};
 use crate::points::Projection;
 use crate::spectrum::expected::of_sampler;
 use crate::spectrum::Method;
+use crate::targets::variance::Design;
 use crate::targets::Target;
 use std::io::Write;
 use std::path::Path;
@@ -667,8 +668,10 @@ fn write_tables(
          uses one set with a random toroidal shift. A shape table is built for one integrand's shear range: for \
          a range that holds 0 it is designed in the frame of the in-focus layer and not moved; for any other \
          it is designed around the range's centre and moved by the oracle's shear (seam-free). A variance table is built once, for the integrand family \
-         and shear its file names, and moved by each integrand's oracle shear. Set-up is the optimization \
-         time recorded when the table was built, also when it is read back from the cache.\n",
+         and shear its file names, and moved by each integrand's oracle shear; with `design = \"lattice\"` its \
+         sets are the rank-1 lattice of lowest predicted variance, found by a search instead of the optimizer. \
+         Set-up is the optimization (or search) time recorded when the table was built, also when it is read \
+         back from the cache.\n",
         c.table_sets
     )?;
     write!(w, "| integrand | table | designed for | start | moved by |")?;
@@ -708,6 +711,13 @@ fn write_tables(
             } else {
                 let each: Vec<String> = starts.iter().map(|(n, s)| format!("N={n}: {s}")).collect();
                 each.join(", ")
+            };
+            let lattice =
+                matches!(&framed, Ok(Target::Variance(v)) if v.design() == Design::Lattice);
+            let start = if lattice {
+                "rank-1 lattice search".to_string()
+            } else {
+                start
             };
             let is_moved = framed.as_ref().is_ok_and(|t| moved(t, range));
             let moved_by = if !is_moved {

@@ -92,7 +92,8 @@ pub enum Design {
     #[default]
     Points,
     /// A search over the rank-1 lattices of N points for the generating vector whose predicted
-    /// variance is lowest ([`crate::optimize::lattice_design`]); `extent` and `weight` do not apply.
+    /// variance is lowest ([`crate::optimize::lattice_design`]); `extent` then sets only the radius
+    /// the fit is reported over, and `weight` does not apply.
     Lattice,
 }
 

@@ -384,8 +384,8 @@ fn widened_hairline_gains_under_oracle_error() {
 /// PMJ02, sheared MJ) is above 3 by more than 2 standard errors, and the lattice design beats the
 /// lattices below by more than 3. Measured for the lattice design: 1.43e-7 at N = 1024, 4.74 ± 0.29×
 /// over sheared MJ, 2.57× and 2.69× over sheared Sobol and PMJ02, 1.61× and 1.98× over the 4D lattice
-/// unsheared and sheared (N = 256: 2.24e-6, 3.56×, 2.39×, 2.24×, 1.60×, 1.06×). Measured (R = 1024, fan offset c = 0.7,
-/// Sobol start): the variance table 1.88e-7, 3.62 ± 0.22× over sheared MJ on the xu plane (the best
+/// unsheared and sheared (N = 256: 2.24e-6, 3.56×, 2.39×, 2.24×, 1.60×, 1.06×). Measured for the
+/// other two (R = 1024, fan offset c = 0.7, Sobol start): the variance table 1.88e-7, 3.62 ± 0.22× over sheared MJ on the xu plane (the best
 /// of the issue's list), 4.2–6.0× over unsheared Sobol and PMJ02; 1.96× and 2.05× over sheared
 /// Sobol and PMJ02 on the xu plane, stronger baselines than the issue asks for (N = 256: 2.99×, 2.00×,
 /// 1.88×; N = 64: 2.52×, 2.14×, 2.34×). The double-wedge shape table: 2.60 ± 0.17× over sheared MJ,

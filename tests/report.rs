@@ -424,14 +424,32 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
         subjects.len() * followers.len() * SHEAR_ERRORS.len()
     );
     let mut rows = rows.iter();
-    let robustness = &section("Robustness to oracle error").rows;
-    let mut expect_header = vec!["integrand".to_string(), "sampler".to_string()];
-    expect_header.extend(SHEAR_ERRORS.map(|e| format!("error {:+.0}%", e * 100.0)));
+    let robustness_section = section("Robustness to oracle error");
+    let robustness = &robustness_section.rows;
+    let mut expect_header = [
+        "integrand",
+        "sampler",
+        "exact oracle",
+        "worst with the oracle off",
+        "mean with the oracle off",
+    ]
+    .map(String::from)
+    .to_vec();
+    expect_header.extend(
+        SHEAR_ERRORS[1..]
+            .iter()
+            .map(|e| format!("error {:+}%", (e * 1000.0).round() / 10.0)),
+    );
     assert_eq!(robustness[0], expect_header);
     let mut table_rows = robustness[1..].iter();
     for (subject, _) in &subjects {
         for (sampler, _) in followers {
-            let mut expect = vec![subject.clone(), sampler.to_string()];
+            let reference = best_classical(subject, at_max);
+            let cell = |mse: f64, stderr: f64| {
+                format!("{mse:.2e} ± {stderr:.1e} ({:.2}×)", reference / mse)
+            };
+            let mut off = Vec::new();
+            let mut exact = String::new();
             for e in SHEAR_ERRORS {
                 let r = rows.next().unwrap();
                 assert_eq!(
@@ -451,16 +469,42 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
                         (study[at_max].mse, study[at_max].mse_stderr),
                         "{subject}, {sampler}: the exact oracle's row is the study's point"
                     );
+                    exact = cell(mse, stderr);
+                } else {
+                    off.push((e, mse, stderr));
                 }
-                expect.push(format!(
-                    "{mse:.2e} ± {stderr:.1e} ({:.2}×)",
-                    best_classical(subject, at_max) / mse
-                ));
             }
+            // One error off: it is the worst, its MSE the mean, and it has a column of its own.
+            let [(e, mse, stderr)] = off[..] else {
+                panic!("one error off the oracle")
+            };
+            let expect = vec![
+                subject.clone(),
+                sampler.to_string(),
+                exact,
+                format!(
+                    "{} at {:+}%",
+                    cell(mse, stderr),
+                    (e * 1000.0).round() / 10.0
+                ),
+                format!("{mse:.2e} ({:.2}×)", reference / mse),
+                cell(mse, stderr),
+            ];
             assert_eq!(table_rows.next(), Some(&expect));
         }
     }
     assert_eq!(table_rows.next(), None);
+    let plots: Vec<&str> = robustness_section
+        .links
+        .iter()
+        .map(|l| l.1.as_str())
+        .collect();
+    assert_eq!(
+        plots.len(),
+        subjects.len(),
+        "a robustness plot per integrand"
+    );
+    assert!(plots.iter().all(|p| p.starts_with("plots/robustness_")));
 
     // The summary: per integrand at the largest N, the best classical sampler with its MSE, and the
     // sampler with the lowest MSE (named first among any that tie) with its gain over it.
@@ -538,7 +582,8 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
         .iter()
         .flat_map(|s| s.links.iter().map(|l| PathBuf::from(&l.1)))
         .collect();
-    assert_eq!(linked.len(), 2 * subjects.len() + SAMPLERS.len());
+    // A convergence, a speed and a robustness plot per integrand, a sheet per sampler.
+    assert_eq!(linked.len(), 3 * subjects.len() + SAMPLERS.len());
     for path in &linked {
         check_png(&out.join(path));
     }

@@ -3,10 +3,10 @@
 
 use super::config::{CompareConfig, GALLERY_SHEAR_RANGE};
 use super::tables::{moved, start_sampler, table_frame, TableCache, TABLE_ITERATIONS};
-use super::{instantiate, usable_n, Outcome, SamplerSpec, Study, SubjectInfo};
+use super::{instantiate, usable_n, Outcome, Robustness, SamplerSpec, Study, SubjectInfo};
 use crate::converge::{plot, Convergence};
 use crate::error::Result;
-use crate::output::plot::{write_loglog_png, LegendCorner, LogLogPlot, Series};
+use crate::output::plot::{write_loglog_png, LegendCorner, LogLogPlot, Series, XScale};
 use crate::output::sheet::{write_sheet, Panel};
 use crate::output::{write_atomic, write_npy};
 use crate::points::Projection;
@@ -61,8 +61,15 @@ pub fn write(
         write_speed_plot(&out.join(&speed), label, &studies, &outcome.config)?;
         plots.push((conv, speed));
     }
+    let mut robustness_plots = Vec::new();
+    for SubjectInfo { label, .. } in &outcome.subjects {
+        let file = format!("plots/robustness_{}.png", slug(label));
+        if write_robustness_plot(&out.join(&file), outcome, label)? {
+            robustness_plots.push((label.clone(), file));
+        }
+    }
     let gallery = write_gallery(outcome, specs, tables, out)?;
-    write_markdown(outcome, specs, &plots, &gallery, out)
+    write_markdown(outcome, specs, &plots, &robustness_plots, &gallery, out)
 }
 
 fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result<()> {
@@ -231,6 +238,7 @@ fn write_speed_plot(
             width: 1000,
             height: 700,
             legend: LegendCorner::UpperRight,
+            x_scale: XScale::Log,
         },
     )
 }
@@ -374,6 +382,7 @@ fn write_markdown(
     outcome: &Outcome,
     specs: &[SamplerSpec],
     plots: &[(String, String)],
+    robustness_plots: &[(String, String)],
     gallery: &[(String, String)],
     out: &Path,
 ) -> Result<()> {
@@ -423,7 +432,7 @@ fn write_markdown(
                 "\n![convergence]({conv})\n![speed against error]({speed})"
             )?;
         }
-        write_robustness(w, outcome)?;
+        write_robustness(w, outcome, robustness_plots)?;
         write_tables(w, outcome, specs)?;
         writeln!(w, "\n## Spectra\n")?;
         writeln!(
@@ -451,19 +460,15 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
     let c = &outcome.config;
     let at = largest_n_index(&c.ns);
     let nmax = c.ns.get(at).copied().unwrap_or(0);
-    let errors = c
-        .oracle_errors
-        .iter()
-        .map(|e| format!("{:+.0}%", e * 100.0))
-        .collect::<Vec<_>>()
-        .join(", ");
+    let errors = errors_text(&c.oracle_errors);
     writeln!(w, "## Summary\n")?;
     writeln!(
         w,
         "At N = {nmax}: the classical sampler with the lowest MSE, and the sampler with the lowest MSE of all \
          (samplers that tie bit for bit are named together, the one most robust to oracle error first), its gain over that classical sampler (its MSE \
          divided by this one's), its time per estimate and its one-off set-up, and its lowest gain when the \
-         oracle's shear is off by {errors} (for the first named; — when it does not use the oracle).\n"
+         oracle's shear is off by {errors}, with the error where it falls (for the first named; — when it does not use \
+         the oracle).\n"
     )?;
     writeln!(
         w,
@@ -482,17 +487,13 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
         };
         let reference = classical.points[at].mse;
         let lowest_gain = |sampler: &str| {
-            outcome
-                .robustness
+            off_rows(outcome, &subject.label, sampler)
                 .iter()
-                .filter(|row| {
-                    row.subject == subject.label && row.sampler == sampler && row.error != 0.0
-                })
-                .map(|row| reference / row.point.mse)
-                .min_by(f64::total_cmp)
+                .map(|row| (reference / row.point.mse, row.error))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
         };
         // Samplers that tie with the exact oracle may part when it is off: the most robust first.
-        let mut tied: Vec<(String, Option<f64>)> = identical_groups(&studies)
+        let mut tied: Vec<(String, Option<(f64, f64)>)> = identical_groups(&studies)
             .into_iter()
             .find(|g| g.contains(&best.sampler))
             .unwrap_or_else(|| vec![best.sampler.clone()])
@@ -503,11 +504,13 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
             })
             .collect();
         tied.sort_by(|a, b| {
-            b.1.unwrap_or(f64::NEG_INFINITY)
-                .total_cmp(&a.1.unwrap_or(f64::NEG_INFINITY))
+            let gain = |t: &(String, Option<(f64, f64)>)| t.1.map_or(f64::NEG_INFINITY, |g| g.0);
+            gain(b).total_cmp(&gain(a))
         });
         let names: Vec<&str> = tied.iter().map(|t| t.0.as_str()).collect();
-        let lowest = tied[0].1.map_or("—".to_string(), |g| format!("{g:.2}×"));
+        let lowest = tied[0].1.map_or("—".to_string(), |(g, e)| {
+            format!("{g:.2}× at {}", error_text(e))
+        });
         let first = studies
             .iter()
             .find(|s| s.sampler == tied[0].0)
@@ -589,28 +592,81 @@ fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io:
     Ok(())
 }
 
-/// The robustness table: at the largest N, MSE ± its standard error and the gain over the best
-/// classical sampler, with the oracle's shear scaled by `1 + error`, errors in increasing order.
-fn write_robustness(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
+/// The errors the robustness table gives columns of their own when the sweep holds them, ±10 % and
+/// ±25 % (robustness.csv and the plots hold every error of the sweep).
+const TABLED_ERRORS: [f64; 4] = [-0.25, -0.1, 0.1, 0.25];
+
+/// A relative error as a signed percentage with at most one decimal, e.g. `+10%`, `-2.5%`.
+fn error_text(e: f64) -> String {
+    format!("{:+}%", (e * 1000.0).round() / 10.0)
+}
+
+/// The config's oracle errors in words: each one when there are few, else their count and range.
+fn errors_text(errors: &[f64]) -> String {
+    let mut sorted = errors.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    match (sorted.first(), sorted.last()) {
+        (Some(lo), Some(hi)) if sorted.len() > 6 => format!(
+            "any of {} errors from {} to {}",
+            sorted.len(),
+            error_text(*lo),
+            error_text(*hi)
+        ),
+        _ => sorted
+            .iter()
+            .map(|&e| error_text(e))
+            .collect::<Vec<_>>()
+            .join(", "),
+    }
+}
+
+/// The robustness rows of one subject and sampler with the oracle off (error ≠ 0), by error.
+fn off_rows<'a>(outcome: &'a Outcome, subject: &str, sampler: &str) -> Vec<&'a Robustness> {
+    let mut rows: Vec<&Robustness> = outcome
+        .robustness
+        .iter()
+        .filter(|r| r.subject == subject && r.sampler == sampler && r.error != 0.0)
+        .collect();
+    rows.sort_by(|a, b| a.error.total_cmp(&b.error));
+    rows
+}
+
+/// The robustness table: at the largest N, per subject and sampler that uses the oracle, the MSE with
+/// the exact oracle, the worst and the mean over the sweep of errors, and the MSE at the errors of
+/// [`TABLED_ERRORS`] the sweep holds, each with its gain over the best classical sampler; then the
+/// plots.
+fn write_robustness(
+    w: &mut impl Write,
+    outcome: &Outcome,
+    plots: &[(String, String)],
+) -> std::io::Result<()> {
     let c = &outcome.config;
     let at = largest_n_index(&c.ns);
     writeln!(w, "\n## Robustness to oracle error\n")?;
     writeln!(
         w,
-        "MSE ± its standard error at N = {} when the oracle's shear is scaled by (1 + error); in brackets, the gain \
-         over the best classical sampler on that integrand at the same N (best classical MSE / this MSE; above 1 \
-         is a gain). Tables keep the shape built for the true shear range; a table for a range that holds an \
-         in-focus layer is designed in that layer's frame and not sheared, so the error does not move it.\n",
-        c.ns.get(at).unwrap_or(&0)
+        "At N = {}, the oracle's shear is scaled by (1 + error) for {} (the sweep). Each cell is the MSE ± its standard \
+         error and, in brackets, the gain over the best classical sampler on that integrand at the same N (best classical \
+         MSE / this MSE; above 1 is a gain). **Worst** is the highest MSE over the sweep, at the error named; **mean** is \
+         the mean MSE over the sweep (the errors share their random streams, so it has no standard error of its own). The plots below show every error. A rank-1 lattice has P = N on its dual lattice, so \
+         at some errors the erred edge's spectrum meets a dual point near the origin: a narrow spike that only a fine sweep \
+         finds. Tables keep the shape built for the true shear range; a table for a range that holds an in-focus layer is \
+         designed in that layer's frame and not sheared, so the error does not move it.\n",
+        c.ns.get(at).unwrap_or(&0),
+        errors_text(&c.oracle_errors)
     )?;
-    let mut errors: Vec<f64> = outcome.robustness.iter().map(|row| row.error).collect();
-    errors.sort_by(f64::total_cmp);
-    errors.dedup();
-    write!(w, "| integrand | sampler |")?;
-    for e in &errors {
-        write!(w, " error {:+.0}% |", e * 100.0)?;
+    let tabled: Vec<f64> = TABLED_ERRORS
+        .into_iter()
+        .filter(|e| outcome.robustness.iter().any(|r| r.error == *e))
+        .collect();
+    write!(
+        w,
+        "| integrand | sampler | exact oracle | worst with the oracle off | mean with the oracle off |"
+    )?;
+    for e in &tabled {
+        write!(w, " error {} |", error_text(*e))?;
     }
-    writeln!(w, "\n|---|---|{}", "---|".repeat(errors.len()))?;
+    writeln!(w, "\n|---|---|---|---|---|{}", "---|".repeat(tabled.len()))?;
     let mut keys: Vec<(&String, &String)> = outcome
         .robustness
         .iter()
@@ -620,26 +676,114 @@ fn write_robustness(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()
     for (subject, sampler) in keys {
         let reference = best_classical(&studies_of(outcome, subject), at)
             .map_or(f64::INFINITY, |s| s.points[at].mse);
-        write!(w, "| {subject} | {sampler} |")?;
-        for e in &errors {
-            match outcome
-                .robustness
-                .iter()
-                .find(|row| &row.subject == subject && &row.sampler == sampler && row.error == *e)
-            {
-                Some(row) => write!(
-                    w,
-                    " {:.2e} ± {:.1e} ({:.2}×) |",
-                    row.point.mse,
-                    row.point.mse_stderr,
-                    reference / row.point.mse
-                )?,
+        let cell = |mse: f64, se: f64| format!("{mse:.2e} ± {se:.1e} ({:.2}×)", reference / mse);
+        let exact = outcome
+            .robustness
+            .iter()
+            .find(|r| &r.subject == subject && &r.sampler == sampler && r.error == 0.0)
+            .map_or("—".to_string(), |r| cell(r.point.mse, r.point.mse_stderr));
+        let off = off_rows(outcome, subject, sampler);
+        let worst = off
+            .iter()
+            .max_by(|a, b| a.point.mse.total_cmp(&b.point.mse))
+            .map_or("—".to_string(), |r| {
+                format!(
+                    "{} at {}",
+                    cell(r.point.mse, r.point.mse_stderr),
+                    error_text(r.error)
+                )
+            });
+        // The errors share their random streams, so the points are correlated and the mean gets no
+        // standard error of its own.
+        let mean = if off.is_empty() {
+            "—".to_string()
+        } else {
+            let mse = off.iter().map(|r| r.point.mse).sum::<f64>() / off.len() as f64;
+            format!("{mse:.2e} ({:.2}×)", reference / mse)
+        };
+        write!(w, "| {subject} | {sampler} | {exact} | {worst} | {mean} |")?;
+        for e in &tabled {
+            match off.iter().find(|r| r.error == *e) {
+                Some(r) => write!(w, " {} |", cell(r.point.mse, r.point.mse_stderr))?,
                 None => write!(w, " — |")?,
             }
         }
         writeln!(w)?;
     }
+    for (label, file) in plots {
+        writeln!(w, "\n![robustness: {label}]({file})")?;
+    }
     Ok(())
+}
+
+/// MSE against the oracle's error at the largest N, one line per sampler that uses the oracle (with
+/// its standard errors), and the best classical sampler, which does not, as a dashed level. Returns
+/// false, writing nothing, when the subject has no robustness rows.
+fn write_robustness_plot(path: &Path, outcome: &Outcome, label: &str) -> Result<bool> {
+    let c = &outcome.config;
+    let at = largest_n_index(&c.ns);
+    let mut samplers: Vec<&String> = outcome
+        .robustness
+        .iter()
+        .filter(|r| r.subject == label)
+        .map(|r| &r.sampler)
+        .collect();
+    samplers.dedup();
+    if samplers.is_empty() {
+        return Ok(false);
+    }
+    let mut series = Vec::new();
+    let mut span = (f64::INFINITY, f64::NEG_INFINITY);
+    for sampler in samplers {
+        let mut rows: Vec<&Robustness> = outcome
+            .robustness
+            .iter()
+            .filter(|r| r.subject == label && &r.sampler == sampler)
+            .collect();
+        rows.sort_by(|a, b| a.error.total_cmp(&b.error));
+        for r in &rows {
+            span = (span.0.min(r.error), span.1.max(r.error));
+        }
+        series.push(Series {
+            label: sampler.clone(),
+            points: rows
+                .iter()
+                .map(|r| (r.error * 100.0, r.point.mse))
+                .collect(),
+            errors: Some(rows.iter().map(|r| r.point.mse_stderr).collect()),
+            dashed: false,
+            colour: None,
+        });
+    }
+    if let Some(classical) = best_classical(&studies_of(outcome, label), at) {
+        let mse = classical.points[at].mse;
+        series.push(Series {
+            label: format!("{} (best classical, no oracle)", classical.sampler),
+            points: vec![(span.0 * 100.0, mse), (span.1 * 100.0, mse)],
+            errors: None,
+            dashed: true,
+            colour: None,
+        });
+    }
+    write_loglog_png(
+        path,
+        &LogLogPlot {
+            title: format!(
+                "{label}: MSE against the oracle's error (N = {}, R = {})",
+                c.ns.get(at).unwrap_or(&0),
+                c.realizations
+            ),
+            x_label: "error of the oracle's shear, % (it shears by the true shear × (1 + error))"
+                .into(),
+            y_label: "MSE (squared integrand units)".into(),
+            series,
+            width: 1000,
+            height: 700,
+            legend: LegendCorner::LowerLeft,
+            x_scale: XScale::Linear,
+        },
+    )?;
+    Ok(true)
 }
 
 /// The optimized tables behind each integrand's rows: the target in the frame the table was designed

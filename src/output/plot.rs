@@ -1,8 +1,10 @@
-//! Log-log line plots written as PNG: several series, each with a label and optional error bars, axis
-//! labels, a title and a legend. Text is drawn with DejaVu Sans embedded in the binary (plotters'
+//! Line plots with a log vertical axis written as PNG (log-log, or linear-log for a signed horizontal
+//! quantity): several series, each with a label and optional error bars, axis labels, a title and a
+//! legend. Text is drawn with DejaVu Sans embedded in the binary (plotters'
 //! `ab_glyph` backend), so no system font is needed.
 
 use crate::error::{Error, Result};
+use plotters::coord::ranged1d::ValueFormatter;
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
@@ -12,7 +14,7 @@ use std::sync::Once;
 pub struct Series {
     /// Legend text, e.g. `jittered: slope -1.51 [-1.55, -1.47]`.
     pub label: String,
-    /// `(x, y)` points, both positive (points that are not are skipped).
+    /// `(x, y)` points: `y` positive, and `x` too on a log axis (points that are not are skipped).
     pub points: Vec<(f64, f64)>,
     /// Optional symmetric error bars (`y ± e`), one per point.
     pub errors: Option<Vec<f64>>,
@@ -49,7 +51,16 @@ pub const PALETTE: [(u8, u8, u8); 12] = [
     (184, 134, 11),
 ];
 
-/// A log-log plot.
+/// How the horizontal axis is scaled (the vertical one is always logarithmic).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum XScale {
+    /// Logarithmic, for positive values such as N or a time.
+    Log,
+    /// Linear, for values of either sign such as a relative error.
+    Linear,
+}
+
+/// A plot with a log vertical axis.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LogLogPlot {
     /// Title above the plot.
@@ -66,6 +77,8 @@ pub struct LogLogPlot {
     pub height: u32,
     /// Where the legend goes.
     pub legend: LegendCorner,
+    /// How the horizontal axis is scaled.
+    pub x_scale: XScale,
 }
 
 static FONT: Once = Once::new();
@@ -116,14 +129,36 @@ fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     }
 }
 
+/// The range `[lo, hi]` of a linear axis, padded by 4 % of its width on each side.
+fn linear_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    if !lo.is_finite() {
+        return None;
+    }
+    let pad = if hi > lo { 0.04 * (hi - lo) } else { 1.0 };
+    Some((lo - pad, hi + pad))
+}
+
 /// Draws `plot` and writes it to `path` as an RGB PNG (atomically).
 pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
     register_font();
-    let keep = |&(x, y): &(f64, f64)| x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite();
+    let x_log = plot.x_scale == XScale::Log;
+    let keep = move |&(x, y): &(f64, f64)| {
+        (x > 0.0 || !x_log) && y > 0.0 && x.is_finite() && y.is_finite()
+    };
     let xs = plot
         .series
         .iter()
         .flat_map(|s| s.points.iter().filter(|p| keep(p)).map(|p| p.0));
+    let x_range = if x_log {
+        log_range(xs)
+    } else {
+        linear_range(xs)
+    };
     let ys = plot.series.iter().flat_map(|s| {
         let errs = s.errors.clone().unwrap_or_default();
         s.points
@@ -135,9 +170,9 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
                 [p.1, p.1 + e, if p.1 - e > 0.0 { p.1 - e } else { p.1 }]
             })
     });
-    let (Some((x0, x1)), Some((y0, y1))) = (log_range(xs), log_range(ys)) else {
+    let (Some((x0, x1)), Some((y0, y1))) = (x_range, log_range(ys)) else {
         return Err(Error::Numerical(format!(
-            "nothing to plot in {}: no series has a positive point",
+            "nothing to plot in {}: no series has a point to draw",
             path.display()
         )));
     };
@@ -147,84 +182,110 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
         let root =
             BitMapBackend::with_buffer(&mut buffer, (plot.width, plot.height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_error(path, e))?;
-        let mut chart = ChartBuilder::on(&root)
+        let mut builder = ChartBuilder::on(&root);
+        builder
             .caption(&plot.title, ("sans-serif", 22))
             .margin(12)
             .x_label_area_size(45)
-            .y_label_area_size(80)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-            .map_err(|e| plot_error(path, e))?;
-        chart
-            .configure_mesh()
-            .x_desc(&plot.x_label)
-            .y_desc(&plot.y_label)
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 16))
-            .x_label_formatter(&|v| format!("{v}"))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
-            .draw()
-            .map_err(|e| plot_error(path, e))?;
-        for (i, s) in plot.series.iter().enumerate() {
-            let slot = s.colour.unwrap_or(i);
-            let (r, g, b) = PALETTE[slot % PALETTE.len()];
-            let colour = RGBColor(r, g, b).to_rgba();
-            // Past the palette, colours come round again with hollow markers.
-            let marker = if (slot / PALETTE.len()).is_multiple_of(2) {
-                colour.filled()
-            } else {
-                colour.stroke_width(2)
-            };
-            let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(keep).collect();
-            let style = colour.stroke_width(2);
-            if s.dashed {
-                chart
-                    .draw_series(DashedLineSeries::new(pts.clone(), 8, 6, style))
-                    .map_err(|e| plot_error(path, e))?
-                    .label(&s.label)
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-                    });
-            } else {
-                chart
-                    .draw_series(LineSeries::new(pts.clone(), style))
-                    .map_err(|e| plot_error(path, e))?
-                    .label(&s.label)
-                    .legend(move |(x, y)| {
-                        EmptyElement::at((x, y))
-                            + PathElement::new(vec![(0, 0), (20, 0)], colour.stroke_width(2))
-                            + Circle::new((10, 0), 4, marker)
-                    });
-                chart
-                    .draw_series(pts.iter().map(|&p| Circle::new(p, 4, marker)))
-                    .map_err(|e| plot_error(path, e))?;
-            }
-            if let Some(errs) = &s.errors {
-                let bars =
-                    s.points
-                        .iter()
-                        .zip(errs)
-                        .filter(|(p, _)| keep(p))
-                        .map(|(&(x, y), &e)| {
-                            let lo = if y - e > 0.0 { y - e } else { y0 };
-                            PathElement::new(vec![(x, lo), (x, y + e)], colour.stroke_width(1))
-                        });
-                chart.draw_series(bars).map_err(|e| plot_error(path, e))?;
-            }
+            .y_label_area_size(80);
+        let y_axis = (y0..y1).log_scale();
+        if x_log {
+            let chart = builder
+                .build_cartesian_2d((x0..x1).log_scale(), y_axis)
+                .map_err(|e| plot_error(path, e))?;
+            draw(chart, plot, path, y0, keep)?;
+        } else {
+            let chart = builder
+                .build_cartesian_2d(x0..x1, y_axis)
+                .map_err(|e| plot_error(path, e))?;
+            draw(chart, plot, path, y0, keep)?;
         }
-        chart
-            .configure_series_labels()
-            .position(match plot.legend {
-                LegendCorner::LowerLeft => SeriesLabelPosition::LowerLeft,
-                LegendCorner::UpperRight => SeriesLabelPosition::UpperRight,
-            })
-            .label_font(("sans-serif", 14))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| plot_error(path, e))?;
         root.present().map_err(|e| plot_error(path, e))?;
     }
     super::image::write_png(path, w, h, 3, &buffer)
+}
+
+/// Draws the mesh, the series and the legend of `plot` on `chart`, whatever its horizontal scale;
+/// `y0` is the bottom of the vertical axis (where an error bar that would cross 0 ends).
+fn draw<'a, X>(
+    mut chart: ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, LogCoord<f64>>>,
+    plot: &LogLogPlot,
+    path: &Path,
+    y0: f64,
+    keep: impl Fn(&(f64, f64)) -> bool,
+) -> Result<()>
+where
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    chart
+        .configure_mesh()
+        .x_desc(&plot.x_label)
+        .y_desc(&plot.y_label)
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .x_label_formatter(&|v| format!("{v}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()
+        .map_err(|e| plot_error(path, e))?;
+    for (i, s) in plot.series.iter().enumerate() {
+        let slot = s.colour.unwrap_or(i);
+        let (r, g, b) = PALETTE[slot % PALETTE.len()];
+        let colour = RGBColor(r, g, b).to_rgba();
+        // Past the palette, colours come round again with hollow markers.
+        let marker = if (slot / PALETTE.len()).is_multiple_of(2) {
+            colour.filled()
+        } else {
+            colour.stroke_width(2)
+        };
+        let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| keep(p)).collect();
+        let style = colour.stroke_width(2);
+        if s.dashed {
+            chart
+                .draw_series(DashedLineSeries::new(pts.clone(), 8, 6, style))
+                .map_err(|e| plot_error(path, e))?
+                .label(&s.label)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                });
+        } else {
+            chart
+                .draw_series(LineSeries::new(pts.clone(), style))
+                .map_err(|e| plot_error(path, e))?
+                .label(&s.label)
+                .legend(move |(x, y)| {
+                    EmptyElement::at((x, y))
+                        + PathElement::new(vec![(0, 0), (20, 0)], colour.stroke_width(2))
+                        + Circle::new((10, 0), 4, marker)
+                });
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 4, marker)))
+                .map_err(|e| plot_error(path, e))?;
+        }
+        if let Some(errs) = &s.errors {
+            let bars = s
+                .points
+                .iter()
+                .zip(errs)
+                .filter(|(p, _)| keep(p))
+                .map(|(&(x, y), &e)| {
+                    let lo = if y - e > 0.0 { y - e } else { y0 };
+                    PathElement::new(vec![(x, lo), (x, y + e)], colour.stroke_width(1))
+                });
+            chart.draw_series(bars).map_err(|e| plot_error(path, e))?;
+        }
+    }
+    chart
+        .configure_series_labels()
+        .position(match plot.legend {
+            LegendCorner::LowerLeft => SeriesLabelPosition::LowerLeft,
+            LegendCorner::UpperRight => SeriesLabelPosition::UpperRight,
+        })
+        .label_font(("sans-serif", 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| plot_error(path, e))?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -258,6 +319,7 @@ mod tests {
             width: 640,
             height: 480,
             legend: LegendCorner::LowerLeft,
+            x_scale: XScale::Log,
         };
         write_loglog_png(&path, &plot).unwrap();
         let decoder =
@@ -283,6 +345,34 @@ mod tests {
             }
         )
         .is_err());
+    }
+
+    /// A linear horizontal axis takes values of either sign (a log one would drop them all here).
+    #[test]
+    fn a_linear_axis_draws_signed_values() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.png");
+        let mut plot = LogLogPlot {
+            title: "signed".into(),
+            x_label: "error, %".into(),
+            y_label: "MSE".into(),
+            series: vec![Series {
+                label: "v".into(),
+                points: vec![(-25.0, 1e-5), (-10.0, 2e-6), (0.0, 1e-7)],
+                errors: None,
+                dashed: false,
+                colour: None,
+            }],
+            width: 320,
+            height: 240,
+            legend: LegendCorner::LowerLeft,
+            x_scale: XScale::Linear,
+        };
+        write_loglog_png(&path, &plot).unwrap();
+        plot.x_scale = XScale::Log;
+        assert!(write_loglog_png(&path, &plot).is_err());
+        assert_eq!(linear_range([-25.0, 25.0].into_iter()), Some((-27.0, 27.0)));
+        assert_eq!(linear_range([3.0].into_iter()), Some((2.0, 4.0)));
     }
 
     /// Every axis range holds a power of ten (where plotters puts its labels) and all the values.

@@ -48,6 +48,16 @@ fn mse_over(
     measure(sampler.as_ref(), s.integrand.as_ref(), n, &cfg).unwrap()
 }
 
+/// The default suite's edge in `xu` (shear 0.5, offset 0.7) and a cache of 8-set tables under `dir`.
+fn xu_edge(dir: &std::path::Path) -> (Subject, TableCache) {
+    let mut cfg = config(&[]);
+    cfg.analytic = CompareConfig::default_suite().analytic[..1].to_vec();
+    cfg.table_sets = 8;
+    let subject = subjects(&cfg, dir).unwrap().remove(0);
+    assert_eq!(subject.label, "hairline edge in xu");
+    (subject, TableCache::new(&cfg, dir))
+}
+
 /// How many combined standard errors `a` lies below `b`.
 fn z_below(a: &ConvergePoint, b: &ConvergePoint) -> f64 {
     (b.mse - a.mse) / (a.mse_stderr.powi(2) + b.mse_stderr.powi(2)).sqrt()
@@ -244,12 +254,8 @@ fn sheared_hairline_degrades_with_oracle_error() {
 #[test]
 fn widened_hairline_survives_oracle_error() {
     let dir = tempfile::tempdir().unwrap();
-    let mut cfg = config(&[]);
-    cfg.analytic = CompareConfig::default_suite().analytic[..1].to_vec();
-    cfg.table_sets = 8;
-    let subject = &subjects(&cfg, dir.path()).unwrap()[0];
-    assert_eq!(subject.label, "hairline edge in xu");
-    let tables = TableCache::new(&cfg, dir.path());
+    let (subject, tables) = xu_edge(dir.path());
+    let subject = &subject;
     let table = SamplerSpec::Table("targets/widened-hairline.toml".into());
     let hairline = SamplerSpec::Sheared("padded-mj".into(), ShearMode::Transported);
     let n = 1024;
@@ -302,11 +308,8 @@ fn widened_hairline_has_the_lowest_worst_case_over_the_sweep() {
     use anisospec::samplers::lattice::generating_vector;
     use anisospec::targets::Variance;
     let dir = tempfile::tempdir().unwrap();
-    let mut cfg = config(&[]);
-    cfg.analytic = CompareConfig::default_suite().analytic[..1].to_vec();
-    cfg.table_sets = 8;
-    let subject = &subjects(&cfg, dir.path()).unwrap()[0];
-    let tables = TableCache::new(&cfg, dir.path());
+    let (subject, tables) = xu_edge(dir.path());
+    let subject = &subject;
     let n = 1024;
     let errors: Vec<f64> = (-10..=10)
         .filter(|&i| i != 0)
@@ -409,11 +412,8 @@ fn gain(a: &ConvergePoint, b: &ConvergePoint) -> (f64, f64) {
 #[test]
 fn widened_hairline_gains_under_oracle_error() {
     let dir = tempfile::tempdir().unwrap();
-    let mut cfg = config(&[]);
-    cfg.analytic = CompareConfig::default_suite().analytic[..1].to_vec();
-    cfg.table_sets = 8;
-    let subject = &subjects(&cfg, dir.path()).unwrap()[0];
-    let tables = TableCache::new(&cfg, dir.path());
+    let (subject, tables) = xu_edge(dir.path());
+    let subject = &subject;
     let table = SamplerSpec::Table("targets/widened-hairline.toml".into());
     let jittered = ["padded-jittered", "xuyv-jittered"].map(|s| SamplerSpec::Classical(s.into()));
     let hairlines = ["padded-mj", "xuyv-mj", "xuyv-nrooks"]

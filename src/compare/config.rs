@@ -202,6 +202,27 @@ impl CompareConfig {
                 "ns lists N = {n} twice; give each size once, e.g. ns = [16, 64, 256]"
             )));
         }
+        if let Some(w) = self.ns.windows(2).find(|w| w[0] > w[1]) {
+            return Err(Error::Usage(format!(
+                "ns lists N = {} before N = {}; give the sizes in increasing order, e.g. ns = [16, 64, 256]",
+                w[0], w[1]
+            )));
+        }
+        if self.oracle_errors.is_empty() {
+            return Err(Error::Usage(
+                "oracle_errors is empty; the robustness study needs at least one error of the oracle's shear, e.g. oracle_errors = [-0.1, 0.1]".into(),
+            ));
+        }
+        if self.oracle_errors.contains(&0.0) {
+            return Err(Error::Usage(
+                "oracle_errors holds 0, the exact oracle, which the robustness study always measures; list only errors, e.g. oracle_errors = [-0.1, 0.1]".into(),
+            ));
+        }
+        if let Some(e) = first_repeat(&self.oracle_errors) {
+            return Err(Error::Usage(format!(
+                "oracle_errors lists {e} twice; give each error once"
+            )));
+        }
         if self.analytic.is_empty() && self.pixel_classes.is_empty() {
             return Err(Error::Usage(
                 "analytic and pixel_classes are both empty, so there is nothing to integrate; add an [[analytic]] entry or a pixel class, e.g. pixel_classes = [\"hairline\"]".into(),
@@ -220,8 +241,18 @@ impl CompareConfig {
                 ))
             })?;
         }
+        if self.classical.is_empty() {
+            return Err(Error::Usage(
+                "classical is empty, but every gain in the report is against the best classical sampler; list at least one, e.g. classical = [\"padded-jittered\"]".into(),
+            ));
+        }
         for name in self.classical.iter().chain(&self.sheared) {
-            crate::samplers::build(name, 4)?;
+            let sampler = crate::samplers::build(name, 4)?;
+            for &n in &self.ns {
+                let n = crate::samplers::usable_n(sampler.as_ref(), n);
+                crate::samplers::validate_n(sampler.as_ref(), n)
+                    .map_err(|e| Error::Usage(format!("ns: {e}")))?;
+            }
         }
         for (key, list) in [("classical", &self.classical), ("sheared", &self.sheared)] {
             if let Some(name) = first_repeat(list) {
@@ -378,11 +409,6 @@ impl CompareConfig {
             .iter()
             .map(super::SamplerSpec::label)
             .collect();
-        if labels.is_empty() {
-            return Err(Error::Usage(
-                "classical, sheared and tables are all empty, so there is no sampler to compare; list at least one, e.g. classical = [\"sobol\"]".into(),
-            ));
-        }
         if let Some(l) = labels.iter().find(|l| l.contains(['"', '|', '\n', '\r'])) {
             return Err(Error::Usage(format!(
                 "sampler {l:?}: a sampler's name (or a table target's file stem) must hold no '\"', '|' or line break (it goes into CSV and markdown tables)"

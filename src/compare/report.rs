@@ -50,6 +50,15 @@ pub fn write(
             .iter()
             .filter(|s| &s.subject == label)
             .collect();
+        // A log axis has no place for an MSE of 0: an integrand every sampler integrates exactly
+        // gets its tables and a line saying so, and no plot.
+        if !studies
+            .iter()
+            .any(|s| s.points.iter().any(|p| drawable(p.mse)))
+        {
+            plots.push(None);
+            continue;
+        }
         let conv = format!("plots/convergence_{}.png", slug(label));
         let speed = format!("plots/speed_{}.png", slug(label));
         write_convergence_plot(
@@ -59,7 +68,7 @@ pub fn write(
             outcome.config.realizations,
         )?;
         write_speed_plot(&out.join(&speed), label, &studies, &outcome.config)?;
-        plots.push((conv, speed));
+        plots.push(Some((conv, speed)));
     }
     let mut robustness_plots = Vec::new();
     for SubjectInfo { label, .. } in &outcome.subjects {
@@ -70,6 +79,11 @@ pub fn write(
     }
     let gallery = write_gallery(outcome, specs, tables, out)?;
     write_markdown(outcome, specs, &plots, &robustness_plots, &gallery, out)
+}
+
+/// Whether an MSE can be drawn on a log axis: finite and above 0.
+fn drawable(mse: f64) -> bool {
+    mse.is_finite() && mse > 0.0
 }
 
 fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result<()> {
@@ -153,17 +167,28 @@ fn slope_text(s: &Study) -> String {
 
 /// The local slope `ln(MSE_b / MSE_a) / ln(N_b / N_a)` between the two largest N the sampler made
 /// (its usable N), where a curve that bends shows its rate at the sizes that matter; `—` with fewer
-/// than two sizes.
+/// than two sizes or an MSE of 0.
 fn local_slope_text(s: &Study) -> String {
     let mut points: Vec<_> = s.points.iter().collect();
     points.sort_by_key(|p| p.n);
     points.dedup_by_key(|p| p.n);
     match points[..] {
-        [.., a, b] => format!(
+        [.., a, b] if a.mse > 0.0 && b.mse > 0.0 => format!(
             "{:.2}",
             (b.mse / a.mse).ln() / (b.n as f64 / a.n as f64).ln()
         ),
         _ => "—".into(),
+    }
+}
+
+/// The gain `reference / mse` of a sampler over the best classical one, as `1.23×`; `—` when it is
+/// not a finite number (no classical reference, or an MSE of 0).
+fn gain_text(reference: f64, mse: f64) -> String {
+    let gain = reference / mse;
+    if gain.is_finite() {
+        format!("{gain:.2}×")
+    } else {
+        "—".into()
     }
 }
 
@@ -381,7 +406,7 @@ fn shear_text(s: f64) -> String {
 fn write_markdown(
     outcome: &Outcome,
     specs: &[SamplerSpec],
-    plots: &[(String, String)],
+    plots: &[Option<(String, String)>],
     robustness_plots: &[(String, String)],
     gallery: &[(String, String)],
     out: &Path,
@@ -425,12 +450,18 @@ fn write_markdown(
                 shear_text(range.1)
             )?;
         }
-        for (SubjectInfo { label, .. }, (conv, speed)) in outcome.subjects.iter().zip(plots) {
+        for (SubjectInfo { label, .. }, files) in outcome.subjects.iter().zip(plots) {
             write_subject(w, outcome, label)?;
-            writeln!(
-                w,
-                "\n![convergence]({conv})\n![speed against error]({speed})"
-            )?;
+            match files {
+                Some((conv, speed)) => writeln!(
+                    w,
+                    "\n![convergence]({conv})\n![speed against error]({speed})"
+                )?,
+                None => writeln!(
+                    w,
+                    "\nNo convergence or speed plot: every MSE of this integrand is 0, which a log axis cannot show."
+                )?,
+            }
         }
         write_robustness(w, outcome, robustness_plots)?;
         write_tables(w, outcome, specs)?;
@@ -490,6 +521,7 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
             off_rows(outcome, &subject.label, sampler)
                 .iter()
                 .map(|row| (reference / row.point.mse, row.error))
+                .filter(|(g, _)| g.is_finite())
                 .min_by(|a, b| a.0.total_cmp(&b.0))
         };
         // Samplers that tie with the exact oracle may part when it is off: the most robust first.
@@ -518,13 +550,13 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
         let p = &first.points[at];
         writeln!(
             w,
-            "| {} | {} | {} ({:.3e}) | {} | {:.2}× | {:.3} | {:.2} | {lowest} |",
+            "| {} | {} | {} ({:.3e}) | {} | {} | {:.3} | {:.2} | {lowest} |",
             subject.label,
             subject.class,
             classical.sampler,
             reference,
             names.join(" = "),
-            reference / p.mse,
+            gain_text(reference, p.mse),
             p.median_seconds * 1e3,
             first.setup_seconds[at],
         )?;
@@ -565,12 +597,12 @@ fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io:
         let p = s.points.last().expect("one point per N");
         writeln!(
             w,
-            " {} | {} | {:.3} | {:.2} | {:.2}× |",
+            " {} | {} | {:.3} | {:.2} | {} |",
             slope_text(s),
             local_slope_text(s),
             p.median_seconds * 1e3,
             s.setup_seconds.last().expect("one set-up time per N"),
-            reference / p.mse
+            gain_text(reference, p.mse)
         )?;
     }
     if let Some(classical) = classical {
@@ -676,16 +708,18 @@ fn write_robustness(
     for (subject, sampler) in keys {
         let reference = best_classical(&studies_of(outcome, subject), at)
             .map_or(f64::INFINITY, |s| s.points[at].mse);
-        let cell = |mse: f64, se: f64| format!("{mse:.2e} ± {se:.1e} ({:.2}×)", reference / mse);
+        let cell =
+            |mse: f64, se: f64| format!("{mse:.2e} ± {se:.1e} ({})", gain_text(reference, mse));
         let exact = outcome
             .robustness
             .iter()
             .find(|r| &r.subject == subject && &r.sampler == sampler && r.error == 0.0)
             .map_or("—".to_string(), |r| cell(r.point.mse, r.point.mse_stderr));
         let off = off_rows(outcome, subject, sampler);
+        // The first of equal worst MSEs, as the summary's lowest gain picks it.
         let worst = off
             .iter()
-            .max_by(|a, b| a.point.mse.total_cmp(&b.point.mse))
+            .min_by(|a, b| b.point.mse.total_cmp(&a.point.mse))
             .map_or("—".to_string(), |r| {
                 format!(
                     "{} at {}",
@@ -699,7 +733,7 @@ fn write_robustness(
             "—".to_string()
         } else {
             let mse = off.iter().map(|r| r.point.mse).sum::<f64>() / off.len() as f64;
-            format!("{mse:.2e} ({:.2}×)", reference / mse)
+            format!("{mse:.2e} ({})", gain_text(reference, mse))
         };
         write!(w, "| {subject} | {sampler} | {exact} | {worst} | {mean} |")?;
         for e in &tabled {
@@ -718,7 +752,7 @@ fn write_robustness(
 
 /// MSE against the oracle's error at the largest N, one line per sampler that uses the oracle (with
 /// its standard errors), and the best classical sampler, which does not, as a dashed level. Returns
-/// false, writing nothing, when the subject has no robustness rows.
+/// false, writing nothing, when the subject has no robustness rows or none with an MSE above 0.
 fn write_robustness_plot(path: &Path, outcome: &Outcome, label: &str) -> Result<bool> {
     let c = &outcome.config;
     let at = largest_n_index(&c.ns);
@@ -729,7 +763,11 @@ fn write_robustness_plot(path: &Path, outcome: &Outcome, label: &str) -> Result<
         .map(|r| &r.sampler)
         .collect();
     samplers.dedup();
-    if samplers.is_empty() {
+    if !outcome
+        .robustness
+        .iter()
+        .any(|r| r.subject == label && drawable(r.point.mse))
+    {
         return Ok(false);
     }
     let mut series = Vec::new();
@@ -886,4 +924,46 @@ fn write_tables(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::converge::ConvergePoint;
+
+    fn study(mses: &[f64]) -> Study {
+        Study {
+            subject: "edge".into(),
+            class: "analytic".into(),
+            sampler: "random".into(),
+            family: "classical",
+            points: mses
+                .iter()
+                .enumerate()
+                .map(|(i, &mse)| ConvergePoint {
+                    n: 16 << (2 * i),
+                    mse,
+                    mse_stderr: 0.0,
+                    mean_error: 0.0,
+                    seconds: 0.0,
+                    median_seconds: 0.0,
+                    evaluations: 0,
+                })
+                .collect(),
+            fit: None,
+            setup_seconds: vec![0.0; mses.len()],
+        }
+    }
+
+    /// An MSE of 0 (an integrand a sampler integrates exactly) reads as "—", never as inf or NaN.
+    #[test]
+    fn an_mse_of_zero_prints_no_infinite_gain_or_slope() {
+        assert_eq!(gain_text(2e-6, 1e-6), "2.00×");
+        assert_eq!(gain_text(2e-6, 0.0), "—");
+        assert_eq!(gain_text(0.0, 0.0), "—");
+        assert_eq!(local_slope_text(&study(&[1e-3, 1e-4])), "-1.66");
+        assert_eq!(local_slope_text(&study(&[1e-3, 0.0])), "—");
+        assert_eq!(local_slope_text(&study(&[0.0, 0.0])), "—");
+        assert!(!drawable(0.0) && !drawable(f64::NAN) && drawable(1e-300));
+    }
 }

@@ -176,9 +176,14 @@ impl TableCache {
             ),
             _ => String::new(),
         };
+        // Everything the optimizer is given (its Debug text: target, strata, repulsion, Fourier
+        // method, iteration budget, start, Latin hold) but the time limit, a safety net whose stops
+        // are warned about, so that a longer limit reuses the tables.
         let key = format!(
-            "{target:?}|n={n}|sets={}|seed={}|iters={TABLE_ITERATIONS}|latin|annular={DEFAULT_ANNULAR_WEIGHT}|centred|start={}|v7{sampling}",
-            self.sets, self.seed, start_sampler(n)
+            "{:?}|sets={}|seed={}|v8{sampling}",
+            table_setup(target.clone(), n, 0.0),
+            self.sets,
+            self.seed
         );
         let stem = source
             .file_stem()
@@ -189,9 +194,10 @@ impl TableCache {
         let meta = path.with_extension("json");
         if let (true, Ok(text)) = (path.is_file(), std::fs::read_to_string(&meta)) {
             if let Ok(m) = serde_json::from_str::<serde_json::Value>(&text) {
-                if m["key"] == key {
+                // A sidecar without its set-up time is as good as missing: rebuild.
+                if let (true, Some(seconds)) = (m["key"] == key, m["seconds"].as_f64()) {
                     match load_table(&path, n) {
-                        Ok(table) => return Ok((table, m["seconds"].as_f64().unwrap_or(0.0))),
+                        Ok(table) => return Ok((table, seconds)),
                         Err(e) => eprintln!("warning: rebuilding an unreadable cached table: {e}"),
                     }
                 }

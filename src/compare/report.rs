@@ -853,7 +853,8 @@ fn write_tables(
          and shear its file names, and moved by each integrand's oracle shear; with `design = \"lattice\"` its \
          sets are the rank-1 lattice of lowest predicted variance, found by a search instead of the optimizer. \
          Set-up is the optimization (or search) time recorded when the table was built, also when it is read \
-         back from the cache.\n",
+         back from the cache; a search's includes the whole computation of the spectrum it searches over, which \
+         one run computes once for every N.\n",
         c.table_sets
     )?;
     write!(w, "| integrand | table | designed for | start | moved by |")?;

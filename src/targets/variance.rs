@@ -179,6 +179,13 @@ impl Variance {
     /// the placements' evaluations [`MAX_EVALUATIONS`]. Computed once per process for each target
     /// and `res`, then shared.
     pub fn spectrum(&self, res: usize) -> Result<Arc<Vec<f64>>> {
+        Ok(self.spectrum_timed(res)?.0)
+    }
+
+    /// [`Variance::spectrum`] and the seconds its computation took, the first time this process
+    /// asked for it (the same figure on every later call, which reuses it): a set-up cost that every
+    /// design from this spectrum shares.
+    pub fn spectrum_timed(&self, res: usize) -> Result<(Arc<Vec<f64>>, f64)> {
         let samples = (4 * res).max(MIN_SAMPLES).next_power_of_two();
         if samples > MAX_SAMPLES {
             return Err(Error::Input(format!(
@@ -194,18 +201,21 @@ impl Variance {
                 self.placements()
             )));
         }
-        static MEMO: OnceLock<Mutex<HashMap<String, Arc<Vec<f64>>>>> = OnceLock::new();
+        type Memo = Mutex<HashMap<String, (Arc<Vec<f64>>, f64)>>;
+        static MEMO: OnceLock<Memo> = OnceLock::new();
         let key = format!("{self:?}|{res}");
         let memo = MEMO.get_or_init(|| Mutex::new(HashMap::new()));
-        if let Some(found) = memo.lock().expect("memo lock").get(&key) {
-            return Ok(Arc::clone(found));
+        if let Some((found, seconds)) = memo.lock().expect("memo lock").get(&key) {
+            return Ok((Arc::clone(found), *seconds));
         }
+        let started = std::time::Instant::now();
         let base = self.parsed()?;
         let spectrum = Arc::new(self.spectrum_sampled(base.as_ref(), res, samples)?);
+        let seconds = started.elapsed().as_secs_f64();
         memo.lock()
             .expect("memo lock")
-            .insert(key, Arc::clone(&spectrum));
-        Ok(spectrum)
+            .insert(key, (Arc::clone(&spectrum), seconds));
+        Ok((spectrum, seconds))
     }
 
     fn spectrum_sampled(&self, base: &dyn Integrand, res: usize, m: usize) -> Result<Vec<f64>> {

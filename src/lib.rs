@@ -3,6 +3,8 @@
 //! The modules follow the pipeline of DESIGN §1: [`samplers`] make [`points`], whose [`spectrum`] is
 //! computed exactly or by NUFFT and viewed as radial, anisotropy and cone profiles; [`output`] writes
 //! npy, EXR, PNG and CSV.
+//!
+#![doc = include_str!("design.md")]
 
 pub mod cli;
 pub mod compare;

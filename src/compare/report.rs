@@ -249,7 +249,7 @@ fn write_speed_plot(
         path,
         &LogLogPlot {
             title: format!(
-                "{label}: MSE against time per estimate (N = {} to {}, R = {})",
+                "{label}: MSE against time per estimate (N = {} to {} or the nearest each sampler makes, R = {})",
                 config.ns.iter().min().unwrap_or(&0),
                 config.ns.iter().max().unwrap_or(&0),
                 config.realizations
@@ -478,7 +478,7 @@ fn write_markdown(
         writeln!(w, "## Files\n")?;
         writeln!(
             w,
-            "`convergence.csv` and `robustness.csv` hold every number above; `mse.npy`, `mse_stderr.npy`, `n.npy` and \
+            "`convergence.csv` and `robustness.csv` hold every measured number above (gains and local slopes are ratios of them); `mse.npy`, `mse_stderr.npy`, `n.npy` and \
              `seconds_per_estimate.npy` are arrays [integrand, sampler, N] in the order of the tables; \
              `spectra/*.npy` are [projection (xy, uv, xu, yv), K, K]."
         )
@@ -603,6 +603,11 @@ fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io:
             p.median_seconds * 1e3,
             s.setup_seconds.last().expect("one set-up time per N"),
             gain_text(reference, p.mse)
+                + &if p.n == nmax {
+                    String::new()
+                } else {
+                    format!(" (N={})", p.n)
+                }
         )?;
     }
     if let Some(classical) = classical {
@@ -770,6 +775,10 @@ fn write_robustness_plot(path: &Path, outcome: &Outcome, label: &str) -> Result<
     {
         return Ok(false);
     }
+    // Each sampler keeps the colour of its line in the convergence and speed plots: its position
+    // among the subject's studies.
+    let studies = studies_of(outcome, label);
+    let colour = |sampler: &str| studies.iter().position(|s| s.sampler == sampler);
     let mut series = Vec::new();
     let mut span = (f64::INFINITY, f64::NEG_INFINITY);
     for sampler in samplers {
@@ -790,17 +799,17 @@ fn write_robustness_plot(path: &Path, outcome: &Outcome, label: &str) -> Result<
                 .collect(),
             errors: Some(rows.iter().map(|r| r.point.mse_stderr).collect()),
             dashed: false,
-            colour: None,
+            colour: colour(sampler),
         });
     }
-    if let Some(classical) = best_classical(&studies_of(outcome, label), at) {
+    if let Some(classical) = best_classical(&studies, at) {
         let mse = classical.points[at].mse;
         series.push(Series {
             label: format!("{} (best classical, no oracle)", classical.sampler),
             points: vec![(span.0 * 100.0, mse), (span.1 * 100.0, mse)],
             errors: None,
             dashed: true,
-            colour: None,
+            colour: colour(&classical.sampler),
         });
     }
     write_loglog_png(

@@ -733,7 +733,6 @@ fn compare_rejects_bad_numbers_and_clashing_names_before_any_work() {
         (|c| c.spectra_n = 0, "spectra_n = 0"),
         (|c| c.spectra_realizations = 0, "spectra_realizations = 0"),
         (|c| c.classical.clear(), "classical is empty"),
-        (|c| c.ns = vec![64, 16], "N = 64 before N = 16"),
         (|c| c.ns = vec![16, 1 << 40], "ns: "),
         (
             |c| c.oracle_errors = vec![-0.1, 0.0],

@@ -202,12 +202,6 @@ impl CompareConfig {
                 "ns lists N = {n} twice; give each size once, e.g. ns = [16, 64, 256]"
             )));
         }
-        if let Some(w) = self.ns.windows(2).find(|w| w[0] > w[1]) {
-            return Err(Error::Usage(format!(
-                "ns lists N = {} before N = {}; give the sizes in increasing order, e.g. ns = [16, 64, 256]",
-                w[0], w[1]
-            )));
-        }
         if self.oracle_errors.is_empty() {
             return Err(Error::Usage(
                 "oracle_errors is empty; the robustness study needs at least one error of the oracle's shear, e.g. oracle_errors = [-0.1, 0.1]".into(),

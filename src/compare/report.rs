@@ -574,8 +574,8 @@ fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io:
     for n in &c.ns {
         write!(w, " MSE at N={n} |")?;
     }
-    let nmax = c.ns.last().copied().unwrap_or(0);
-    let last = c.ns.len().saturating_sub(1);
+    let last = largest_n_index(&c.ns);
+    let nmax = c.ns.get(last).copied().unwrap_or(0);
     writeln!(w, " slope [95% CI] | local slope | ms/estimate at N={nmax} | set-up s at N={nmax} | gain over best classical at N={nmax} |")?;
     writeln!(
         w,
@@ -594,14 +594,14 @@ fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io:
             };
             write!(w, " {:.3e} ± {:.1e}{shown} |", p.mse, p.mse_stderr)?;
         }
-        let p = s.points.last().expect("one point per N");
+        let p = &s.points[last];
         writeln!(
             w,
             " {} | {} | {:.3} | {:.2} | {} |",
             slope_text(s),
             local_slope_text(s),
             p.median_seconds * 1e3,
-            s.setup_seconds.last().expect("one set-up time per N"),
+            s.setup_seconds[last],
             gain_text(reference, p.mse)
                 + &if p.n == nmax {
                     String::new()

@@ -177,6 +177,9 @@ fn nrooks_cones_aligned_versus_oblique_step() {
         "aligned: axis cone slope {:.3} ± {:.3}, total {:.3} ± {:.3}",
         fit.slope, fit.stderr, total.slope, total.stderr
     );
+    // As in the header: the fits' own standard errors (measured 0.004) stay below 0.05, so that the
+    // ±0.15 tolerance is at least 3 of them and still tells −2 from −1.5.
+    assert!(fit.stderr < 0.05 && total.stderr < 0.05);
     assert!((fit.slope + 2.0).abs() < 0.15 && (total.slope + 2.0).abs() < 0.15);
 
     // 30° step: the edge's spectrum lies along 30°, in cone 1; the square's sides add axis terms
@@ -210,6 +213,11 @@ fn nrooks_cones_aligned_versus_oblique_step() {
     eprintln!(
         "30°: diagonal cones slope {:.3} ± {:.3}",
         fit.slope, fit.stderr
+    );
+    assert!(
+        fit.stderr < 0.05,
+        "30°: slope standard error {}",
+        fit.stderr
     );
     assert!((fit.slope + 1.0).abs() < 0.15);
 }

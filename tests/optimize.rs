@@ -125,8 +125,12 @@ fn gradient_matches_finite_differences_for_every_target_kind() {
                 "{} {dims}D: relative gradient error {err:.2e}",
                 target.kind()
             );
+            // Central differences at h = 1e-6 err by rounding, about ε|L|/h ≈ 2e-10 relative
+            // (measured 3e-10 to 1.3e-9 over the kinds), and by truncation h²|L'''|/6, far smaller
+            // here. A gradient that drops or mis-signs one term of the loss errs by 1e-3 or more, so
+            // 1e-7 (75× the largest measured) tells the two apart by four orders of magnitude.
             assert!(
-                err <= 1e-5,
+                err <= 1e-7,
                 "{} in {dims}D: relative gradient error {err:.2e}",
                 target.kind()
             );
@@ -354,7 +358,6 @@ fn degenerate_starts_end_in_a_finite_report() {
             rep.loss.is_finite() && rep.loss < rep.initial_loss,
             "{name}: {rep:?}"
         );
-        assert!(!rep.stop.is_empty());
         eprintln!(
             "{name}: loss {:.3e} -> {:.3e}, separated {}, {}",
             rep.initial_loss, rep.loss, rep.separated, rep.stop
@@ -390,7 +393,12 @@ fn extreme_targets_end_in_a_clear_report() {
         annular_weight: DEFAULT_ANNULAR_WEIGHT,
     };
     let (_, reports) = optimize_sets(&setup, 2, 1, &|_| {}).unwrap();
-    assert!(reports.iter().all(|r| r.loss.is_finite()));
+    assert!(
+        reports
+            .iter()
+            .all(|r| r.loss.is_finite() && r.loss < r.initial_loss),
+        "{reports:?}"
+    );
     // The whole domain dark is out of reach, and says by how much.
     let all = Target::parse("kind = \"blue-noise\"\nradius = 1e6\n").unwrap();
     let e = all.grid(64).unwrap_err();

@@ -13,6 +13,7 @@ pub mod optimize;
 pub mod output;
 pub mod points;
 pub mod progress;
+pub mod quad;
 pub mod render;
 pub mod rng;
 pub mod samplers;

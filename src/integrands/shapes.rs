@@ -3,11 +3,11 @@
 //! [`super::compose::Embed`], `(x1, x2)` become e.g. `(x, u)`.
 
 use super::polygon;
-use super::quad;
 use super::{Integrand, Reference};
 use crate::error::{Error, Result};
 use crate::points::shear::MAX_SHEAR;
 use crate::points::wrap;
+use crate::quad;
 use crate::rng::Rng;
 use rand::Rng as _;
 use rustfft::num_complex::Complex64;

@@ -28,7 +28,7 @@
 
 use super::fourier;
 use crate::points::{wrap, Projection};
-use crate::spectrum::Method;
+use crate::spectrum::{frequency, Method};
 use crate::targets::TargetGrid;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
@@ -105,7 +105,6 @@ impl Objective {
         let pts = projected(set, self.dims, term.proj);
         let g = &term.grid;
         let res = g.res;
-        let half = (res / 2) as f64;
         let n = self.n as f64;
         let f = fourier::type1(&pts, res, self.method);
         let power: Vec<f64> = f.iter().map(|z| z.norm_sqr() / n).collect();
@@ -157,7 +156,8 @@ impl Objective {
                 Some(a) if with_annuli => annular_pull[a],
                 _ => 0.0,
             };
-            let (k1, k2) = ((idx % res) as f64 - half, (idx / res) as f64 - half);
+            let (k1, k2) = frequency(idx, res);
+            let (k1, k2) = (k1 as f64, k2 as f64);
             // 2πi (k1 + i k2) = 2π (−k2 + i k1)
             *c = f[idx] * Complex64::new(-TAU * k2, TAU * k1) * (w * r + pull);
         }

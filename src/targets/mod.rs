@@ -21,6 +21,7 @@
 //! ```
 
 use crate::error::{Error, Result};
+use crate::spectrum::frequency;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -484,8 +485,8 @@ impl Target {
         let mut inside = vec![false; res * res];
         for i in 0..res {
             for j in 0..res {
-                let (k1, k2) = (j as i64 - half, i as i64 - half);
                 let idx = i * res + j;
+                let (k1, k2) = frequency(idx, res);
                 let t = self.value(k1 as f64 / sqrt_n, k2 as f64 / sqrt_n);
                 target[idx] = t;
                 let r = (k1 as f64).hypot(k2 as f64);
@@ -525,11 +526,8 @@ impl Target {
         // Dark and rim cells share the weight `dark_weight` in proportion to `(|k| / sqrt(N))^(−α)`.
         let alpha = self.falloff();
         let emphasis = |idx: usize| {
-            let (k1, k2) = (
-                (idx % res) as f64 - half as f64,
-                (idx / res) as f64 - half as f64,
-            );
-            (k1.hypot(k2) / sqrt_n).powf(-alpha)
+            let (k1, k2) = frequency(idx, res);
+            ((k1 as f64).hypot(k2 as f64) / sqrt_n).powf(-alpha)
         };
         let dark_total: f64 = (0..res * res)
             .filter(|&idx| dark[idx] || rim[idx])
@@ -561,11 +559,8 @@ impl Target {
         let annuli = grid.annuli();
         grid.rings = (0..res * res)
             .map(|idx| {
-                let (k1, k2) = (
-                    (idx % res) as f64 - half as f64,
-                    (idx / res) as f64 - half as f64,
-                );
-                let r = k1.hypot(k2).round() as usize;
+                let (k1, k2) = frequency(idx, res);
+                let r = (k1 as f64).hypot(k2 as f64).round() as usize;
                 (grid.weight[idx] > 0.0 && !grid.dark[idx] && r < annuli).then_some(r as u32)
             })
             .collect();
@@ -579,7 +574,7 @@ fn variance_grid(v: &Variance, n: usize, res: usize, fit_radius: f64) -> Result<
     let power = v.spectrum(res)?;
     let half = (res / 2) as i64;
     let inside = |idx: usize| {
-        let (k1, k2) = ((idx % res) as i64 - half, (idx / res) as i64 - half);
+        let (k1, k2) = frequency(idx, res);
         k1 > -half && k2 > -half && (k1, k2) != (0, 0) && (k1 as f64).hypot(k2 as f64) <= fit_radius
     };
     let total: f64 = (0..res * res)

@@ -16,7 +16,7 @@ use crate::points::{project, Projection};
 use crate::rng;
 use crate::samplers::Sampler;
 use crate::spectrum::profiles::cone_index;
-use crate::spectrum::{check_res, fourier_sums, Method};
+use crate::spectrum::{check_res, fourier_sums, frequency, Method};
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 use std::f64::consts::TAU;
@@ -108,7 +108,6 @@ fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spe
             planes.len()
         )));
     }
-    let half = (res / 2) as i64;
     let dims = f.dims();
     let mut active = Vec::with_capacity(planes.len());
     let mut max_w: f64 = 0.0;
@@ -116,7 +115,7 @@ fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spe
         let list: Vec<(usize, f64, usize)> = (0..res * res)
             .into_par_iter()
             .filter_map(|idx| {
-                let (k1, k2) = ((idx % res) as i64 - half, (idx / res) as i64 - half);
+                let (k1, k2) = frequency(idx, res);
                 if k1 == 0 && k2 == 0 {
                     return None;
                 }
@@ -193,19 +192,19 @@ fn power_at(
         return active.iter().map(|e| sums[e.0].norm_sqr() / n).collect();
     }
     // Distinct columns and rows used, and each active frequency's position among them.
-    let half = (res / 2) as i64;
     let mut col = vec![usize::MAX; res];
     let mut row = vec![usize::MAX; res];
     let (mut k1s, mut k2s) = (Vec::new(), Vec::new());
     for e in active {
         let (j, i) = (e.0 % res, e.0 / res);
+        let (k1, k2) = frequency(e.0, res);
         if col[j] == usize::MAX {
             col[j] = k1s.len();
-            k1s.push(j as i64 - half);
+            k1s.push(k1);
         }
         if row[i] == usize::MAX {
             row[i] = k2s.len();
-            k2s.push(i as i64 - half);
+            k2s.push(k2);
         }
     }
     let at: Vec<(usize, usize)> = active

@@ -18,6 +18,7 @@ pub mod render;
 pub mod rng;
 pub mod samplers;
 pub mod spectrum;
+pub mod stats;
 pub mod targets;
 pub mod variance;
 

@@ -15,6 +15,7 @@ use crate::error::{Error, Result};
 use crate::integrands::Integrand;
 use crate::rng;
 use crate::samplers::{validate_n, Sampler};
+use crate::stats::mean_and_stderr;
 use rand::Rng as _;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -142,14 +143,12 @@ pub fn measure(
     let seconds = start.elapsed().as_secs_f64();
     times.sort_by(f64::total_cmp);
     let median_seconds = times[times.len() / 2];
-    let rr = errors.len() as f64;
-    let mse = errors.iter().map(|e| e * e).sum::<f64>() / rr;
-    let var_sq = errors.iter().map(|e| (e * e - mse).powi(2)).sum::<f64>() / (rr - 1.0);
+    let (mse, mse_stderr) = mean_and_stderr(errors.iter().map(|e| e * e));
     let point = ConvergePoint {
         n,
         mse,
-        mse_stderr: (var_sq / rr).sqrt(),
-        mean_error: errors.iter().sum::<f64>() / rr,
+        mse_stderr,
+        mean_error: errors.iter().sum::<f64>() / errors.len() as f64,
         seconds,
         median_seconds,
         evaluations: (n * cfg.realizations) as u64,

@@ -17,6 +17,7 @@ use crate::rng;
 use crate::samplers::Sampler;
 use crate::spectrum::profiles::cone_index;
 use crate::spectrum::{check_res, fourier_sums, frequency, Method};
+use crate::stats::mean_and_stderr;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 use std::f64::consts::TAU;
@@ -259,13 +260,6 @@ fn realizations(
         .collect()
 }
 
-fn mean_se(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
-    let r = v.clone().count() as f64;
-    let m = v.clone().sum::<f64>() / r;
-    let var = v.map(|x| (x - m).powi(2)).sum::<f64>() / (r - 1.0);
-    (m, (var / r).sqrt())
-}
-
 /// Predicts the variance of `sampler` on `f` for every `N` of `ns`.
 pub fn predict(
     sampler: &dyn Sampler,
@@ -288,11 +282,11 @@ pub fn predict(
         }
         let spec = &spec.as_ref().expect("computed above").1;
         let per = realizations(sampler, spec, n, res, cfg);
-        let (grid, stderr) = mean_se(per.iter().map(|p| p.0));
+        let (grid, stderr) = mean_and_stderr(per.iter().map(|p| p.0));
         let mut cones = Vec::with_capacity(cfg.cones);
         let mut cone_stderr = Vec::with_capacity(cfg.cones);
         for c in 0..cfg.cones {
-            let (m, s) = mean_se(per.iter().map(|p| p.1[c]));
+            let (m, s) = mean_and_stderr(per.iter().map(|p| p.1[c]));
             cones.push(m);
             cone_stderr.push(s);
         }

@@ -101,7 +101,7 @@ pub fn check_plan(
 }
 
 /// The error `I_N − I` of realization `r` at size `n`.
-pub fn realization_error(
+fn realization_error(
     sampler: &dyn Sampler,
     f: &dyn Integrand,
     n: usize,
@@ -200,7 +200,7 @@ pub fn fit_points(points: &[ConvergePoint]) -> Option<SlopeFit> {
 }
 
 /// CSV rows for [`write_csv`]: one row per sampler and `N`.
-pub const CSV_HEADER: &[&str] = &[
+const CSV_HEADER: &[&str] = &[
     "sampler",
     "integrand",
     "n",
@@ -214,7 +214,7 @@ pub const CSV_HEADER: &[&str] = &[
     "slope_ci_high",
 ];
 
-/// Writes studies as CSV (atomically): the columns of [`CSV_HEADER`]; the slope columns repeat the
+/// Writes studies as CSV (atomically): the columns of `CSV_HEADER`; the slope columns repeat the
 /// sampler's fit on each of its rows (empty when there is no fit).
 pub fn write_csv(path: &std::path::Path, studies: &[Convergence]) -> Result<()> {
     use std::io::Write;
@@ -249,7 +249,7 @@ pub fn write_csv(path: &std::path::Path, studies: &[Convergence]) -> Result<()> 
 }
 
 /// Quotes a CSV field that holds a comma.
-pub fn csv_field(s: &str) -> String {
+fn csv_field(s: &str) -> String {
     if s.contains(',') || s.contains('"') {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {

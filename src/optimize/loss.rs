@@ -101,7 +101,7 @@ fn torus_delta(a: f64, b: f64) -> f64 {
 impl Objective {
     /// The spectral loss of one term and its gradient with respect to the term's two coordinates
     /// (`[n]` each).
-    pub fn term_loss(&self, term: &Term, set: &[f64]) -> (f64, Vec<f64>, Vec<f64>) {
+    fn term_loss(&self, term: &Term, set: &[f64]) -> (f64, Vec<f64>, Vec<f64>) {
         let pts = projected(set, self.dims, term.proj);
         let g = &term.grid;
         let res = g.res;
@@ -169,7 +169,7 @@ impl Objective {
     }
 
     /// The repulsion energy of one projection and its gradient (`[n]` per coordinate).
-    pub fn repulsion_loss(&self, proj: Projection, set: &[f64]) -> (f64, Vec<f64>, Vec<f64>) {
+    fn repulsion_loss(&self, proj: Projection, set: &[f64]) -> (f64, Vec<f64>, Vec<f64>) {
         let n = self.n;
         let rep = self.repulsion;
         if rep.weight == 0.0 || rep.radius <= 0.0 || n < 2 {

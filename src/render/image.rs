@@ -151,7 +151,7 @@ impl ReferenceImage {
 }
 
 /// The cache file of a scene's reference image at `count` rays per pixel.
-pub fn reference_cache_file(scene: &Scene, count: usize, dir: &Path) -> PathBuf {
+fn reference_cache_file(scene: &Scene, count: usize, dir: &Path) -> PathBuf {
     let key = format!("v{RENDER_VERSION} {} count={count}", scene.config().key());
     dir.join(format!("image-{:016x}.npy", fnv1a(&key)))
 }

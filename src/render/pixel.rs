@@ -129,7 +129,7 @@ impl PixelIntegrand {
     }
 
     /// Sets the name reported by [`Integrand::name`].
-    pub fn with_label(mut self, label: String) -> Self {
+    fn with_label(mut self, label: String) -> Self {
         self.label = label;
         self
     }

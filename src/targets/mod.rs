@@ -418,7 +418,7 @@ impl Target {
 
     /// The area of the dark region in normalized frequency, i.e. its expected number of frequency
     /// cells in units of `N` (an upper bound where parts overlap).
-    pub fn dark_area(&self) -> f64 {
+    fn dark_area(&self) -> f64 {
         use std::f64::consts::PI;
         match self {
             Target::Hairline(h) => {
@@ -456,7 +456,7 @@ impl Target {
 
     /// Like [`Target::grid`] but with the fit radius (in frequency cells) given: used to judge a fit
     /// beyond the radius it was optimized over.
-    pub fn grid_within(&self, n: usize, fit_radius: f64) -> Result<TargetGrid> {
+    fn grid_within(&self, n: usize, fit_radius: f64) -> Result<TargetGrid> {
         if n < 2 {
             return Err(Error::Usage(format!(
                 "-n {n}: an optimized set needs at least 2 points"

@@ -248,7 +248,8 @@ pub fn write_csv(path: &std::path::Path, studies: &[Convergence]) -> Result<()> 
     })
 }
 
-/// Quotes a CSV field that holds a comma.
+/// Quotes a CSV field that holds a comma or a `"` (doubling each `"` inside, as RFC 4180 asks);
+/// other fields are written as they are.
 fn csv_field(s: &str) -> String {
     if s.contains(',') || s.contains('"') {
         format!("\"{}\"", s.replace('"', "\"\""))

@@ -38,6 +38,11 @@ pub const DARK_LEVEL: f64 = 0.05;
 /// [`TargetGrid::weight`]).
 pub const DEFAULT_DARK_WEIGHT: f64 = 8.0;
 
+/// The largest `dark_weight`, as for the optimizer's other loss weights: the loss's terms are of order
+/// 1, and far larger weights stall the solver's line search (measured: from about 1e20 the sets stay
+/// where they started) or overflow the loss to infinity (about 1e308).
+pub const MAX_DARK_WEIGHT: f64 = 1e6;
+
 /// A widened hairline: dark within perpendicular distance `(half_width + opening · |k| / sqrt(N)) *
 /// sqrt(N)` of the line `k2 = shear * k1` up to `|k| = length * sqrt(N)`, and inside the disc
 /// `|k| < inner_radius * sqrt(N)`.
@@ -58,7 +63,8 @@ pub struct Hairline {
     /// Radius of the dark disc around the origin, in units of `sqrt(N)`.
     #[serde(default)]
     pub inner_radius: f64,
-    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
+    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`], at most
+    /// [`MAX_DARK_WEIGHT`]).
     #[serde(default)]
     pub dark_weight: Option<f64>,
     /// Exponent `α` of a low-frequency emphasis inside the dark region and its rim: cell `k` weighs
@@ -86,7 +92,8 @@ pub struct DoubleWedge {
     /// Radius of the dark disc around the origin, in units of `sqrt(N)`.
     #[serde(default)]
     pub inner_radius: f64,
-    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
+    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`], at most
+    /// [`MAX_DARK_WEIGHT`]).
     #[serde(default)]
     pub dark_weight: Option<f64>,
     /// Exponent `α` of a low-frequency emphasis inside the dark region and its rim: cell `k` weighs
@@ -101,7 +108,8 @@ pub struct DoubleWedge {
 pub struct BlueNoise {
     /// Radius of the dark disc, in units of `sqrt(N)`.
     pub radius: f64,
-    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
+    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`], at most
+    /// [`MAX_DARK_WEIGHT`]).
     #[serde(default)]
     pub dark_weight: Option<f64>,
     /// Exponent `α` of a low-frequency emphasis inside the dark region and its rim: cell `k` weighs
@@ -125,7 +133,8 @@ pub struct Image {
     pub file: PathBuf,
     /// Half-width of the image in normalized frequency `ν`.
     pub extent: f64,
-    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
+    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`], at most
+    /// [`MAX_DARK_WEIGHT`]).
     #[serde(default)]
     pub dark_weight: Option<f64>,
     /// Exponent `α` of a low-frequency emphasis inside the dark region and its rim: cell `k` weighs
@@ -223,9 +232,9 @@ fn non_negative(name: &str, v: f64) -> Result<()> {
 fn dark_weight(w: Option<f64>) -> Result<f64> {
     let w = w.unwrap_or(DEFAULT_DARK_WEIGHT);
     finite("dark_weight", w)?;
-    if w <= 0.0 {
+    if !(w > 0.0 && w <= MAX_DARK_WEIGHT) {
         return Err(Error::Input(format!(
-            "target parameter 'dark_weight' is {w}; it must be > 0"
+            "target parameter 'dark_weight' is {w:?}; give a number > 0 and at most {MAX_DARK_WEIGHT:e} (larger weights overflow the solver's line search)"
         )));
     }
     Ok(w)
@@ -705,6 +714,26 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("half_width"));
+    }
+
+    #[test]
+    fn dark_weight_is_bounded() {
+        let with = |w: &str| {
+            Target::parse(&format!(
+                "kind = \"blue-noise\"\nradius = 0.5\ndark_weight = {w}\n"
+            ))
+        };
+        assert!(with("20000").is_ok());
+        assert!(with("1e6").is_ok());
+        for bad in ["0", "-1", "1.5e6", "1e308"] {
+            let e = with(bad).unwrap_err();
+            assert!(matches!(e, Error::Input(_)), "{bad}: {e}");
+            let m = e.to_string();
+            assert!(
+                m.contains("'dark_weight'") && m.contains("at most 1e6"),
+                "{bad}: {m}"
+            );
+        }
     }
 
     #[test]

@@ -15,10 +15,12 @@ pub mod optimize;
 pub mod output;
 pub mod points;
 pub mod progress;
+pub mod quad;
 pub mod render;
 pub mod rng;
 pub mod samplers;
 pub mod spectrum;
+pub mod stats;
 pub mod targets;
 pub mod variance;
 

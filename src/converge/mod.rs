@@ -15,6 +15,7 @@ use crate::error::{Error, Result};
 use crate::integrands::Integrand;
 use crate::rng;
 use crate::samplers::{validate_n, Sampler};
+use crate::stats::mean_and_stderr;
 use rand::Rng as _;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -100,7 +101,7 @@ pub fn check_plan(
 }
 
 /// The error `I_N − I` of realization `r` at size `n`.
-pub fn realization_error(
+fn realization_error(
     sampler: &dyn Sampler,
     f: &dyn Integrand,
     n: usize,
@@ -142,14 +143,12 @@ pub fn measure(
     let seconds = start.elapsed().as_secs_f64();
     times.sort_by(f64::total_cmp);
     let median_seconds = times[times.len() / 2];
-    let rr = errors.len() as f64;
-    let mse = errors.iter().map(|e| e * e).sum::<f64>() / rr;
-    let var_sq = errors.iter().map(|e| (e * e - mse).powi(2)).sum::<f64>() / (rr - 1.0);
+    let (mse, mse_stderr) = mean_and_stderr(errors.iter().map(|e| e * e));
     let point = ConvergePoint {
         n,
         mse,
-        mse_stderr: (var_sq / rr).sqrt(),
-        mean_error: errors.iter().sum::<f64>() / rr,
+        mse_stderr,
+        mean_error: errors.iter().sum::<f64>() / errors.len() as f64,
         seconds,
         median_seconds,
         evaluations: (n * cfg.realizations) as u64,
@@ -201,7 +200,7 @@ pub fn fit_points(points: &[ConvergePoint]) -> Option<SlopeFit> {
 }
 
 /// CSV rows for [`write_csv`]: one row per sampler and `N`.
-pub const CSV_HEADER: &[&str] = &[
+const CSV_HEADER: &[&str] = &[
     "sampler",
     "integrand",
     "n",
@@ -215,7 +214,7 @@ pub const CSV_HEADER: &[&str] = &[
     "slope_ci_high",
 ];
 
-/// Writes studies as CSV (atomically): the columns of [`CSV_HEADER`]; the slope columns repeat the
+/// Writes studies as CSV (atomically): the columns of `CSV_HEADER`; the slope columns repeat the
 /// sampler's fit on each of its rows (empty when there is no fit).
 pub fn write_csv(path: &std::path::Path, studies: &[Convergence]) -> Result<()> {
     use std::io::Write;
@@ -249,8 +248,9 @@ pub fn write_csv(path: &std::path::Path, studies: &[Convergence]) -> Result<()> 
     })
 }
 
-/// Quotes a CSV field that holds a comma.
-pub fn csv_field(s: &str) -> String {
+/// Quotes a CSV field that holds a comma or a `"` (doubling each `"` inside, as RFC 4180 asks);
+/// other fields are written as they are.
+fn csv_field(s: &str) -> String {
     if s.contains(',') || s.contains('"') {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {

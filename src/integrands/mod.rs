@@ -9,7 +9,6 @@
 
 pub mod compose;
 pub mod polygon;
-pub mod quad;
 pub mod shapes;
 pub mod spec;
 

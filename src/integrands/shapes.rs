@@ -3,11 +3,11 @@
 //! [`super::compose::Embed`], `(x1, x2)` become e.g. `(x, u)`.
 
 use super::polygon;
-use super::quad;
 use super::{Integrand, Reference};
 use crate::error::{Error, Result};
 use crate::points::shear::MAX_SHEAR;
 use crate::points::wrap;
+use crate::quad;
 use crate::rng::Rng;
 use rand::Rng as _;
 use rustfft::num_complex::Complex64;
@@ -267,7 +267,9 @@ pub struct HalfPlane {
 }
 
 impl HalfPlane {
-    /// An oriented step at angle `theta_deg` (degrees) with offset `c` (`None`: through the centre).
+    /// An oriented step `n·x < c` with unit normal `n = (cos θ, sin θ)`: `θ = theta_deg` is the angle of
+    /// the normal (not the edge) from the `x1` axis towards `x2`, in degrees. `c` is the offset along
+    /// `n` (`None`: the edge through the centre `(½, ½)`, `c = (cos θ + sin θ)/2`).
     pub fn oriented(theta_deg: f64, c: Option<f64>) -> Result<Self> {
         let t = finite("step", "theta", theta_deg)?.to_radians();
         Self::build(

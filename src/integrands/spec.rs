@@ -83,8 +83,6 @@ fn build_fan(p: &Params) -> Result<Box<dyn Integrand>> {
     )?))
 }
 
-/// Every integrand family the parser knows.
-///
 /// Every analytic integrand family the parser knows (the renderer's `pixel:` is parsed apart, see
 /// [`Family`]).
 pub const FAMILIES: &[Family] = &[

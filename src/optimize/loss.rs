@@ -28,7 +28,7 @@
 
 use super::fourier;
 use crate::points::{wrap, Projection};
-use crate::spectrum::Method;
+use crate::spectrum::{frequency, Method};
 use crate::targets::TargetGrid;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
@@ -101,11 +101,10 @@ fn torus_delta(a: f64, b: f64) -> f64 {
 impl Objective {
     /// The spectral loss of one term and its gradient with respect to the term's two coordinates
     /// (`[n]` each).
-    pub fn term_loss(&self, term: &Term, set: &[f64]) -> (f64, Vec<f64>, Vec<f64>) {
+    fn term_loss(&self, term: &Term, set: &[f64]) -> (f64, Vec<f64>, Vec<f64>) {
         let pts = projected(set, self.dims, term.proj);
         let g = &term.grid;
         let res = g.res;
-        let half = (res / 2) as f64;
         let n = self.n as f64;
         let f = fourier::type1(&pts, res, self.method);
         let power: Vec<f64> = f.iter().map(|z| z.norm_sqr() / n).collect();
@@ -157,7 +156,8 @@ impl Objective {
                 Some(a) if with_annuli => annular_pull[a],
                 _ => 0.0,
             };
-            let (k1, k2) = ((idx % res) as f64 - half, (idx / res) as f64 - half);
+            let (k1, k2) = frequency(idx, res);
+            let (k1, k2) = (k1 as f64, k2 as f64);
             // 2πi (k1 + i k2) = 2π (−k2 + i k1)
             *c = f[idx] * Complex64::new(-TAU * k2, TAU * k1) * (w * r + pull);
         }
@@ -169,7 +169,7 @@ impl Objective {
     }
 
     /// The repulsion energy of one projection and its gradient (`[n]` per coordinate).
-    pub fn repulsion_loss(&self, proj: Projection, set: &[f64]) -> (f64, Vec<f64>, Vec<f64>) {
+    fn repulsion_loss(&self, proj: Projection, set: &[f64]) -> (f64, Vec<f64>, Vec<f64>) {
         let n = self.n;
         let rep = self.repulsion;
         if rep.weight == 0.0 || rep.radius <= 0.0 || n < 2 {

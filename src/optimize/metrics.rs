@@ -37,12 +37,7 @@ pub struct Fit {
 }
 
 /// The expected spectrum `mean_s P_s(k)` of `proj` over all sets, on the grid's `res × res` frequencies.
-pub fn expected_power(
-    points: &PointSets,
-    proj: Projection,
-    res: usize,
-    method: Method,
-) -> Vec<f64> {
+fn expected_power(points: &PointSets, proj: Projection, res: usize, method: Method) -> Vec<f64> {
     let n = points.n() as f64;
     let per_set: Vec<Vec<f64>> = (0..points.sets())
         .into_par_iter()

@@ -205,7 +205,7 @@ pub struct SetReport {
 /// Moves apart points that coincide (within `1e-9 / sqrt(N)`) with a lower-numbered point in any
 /// constrained projection, by a uniform step of up to `1e-3 / sqrt(N)` per coordinate. Returns how many
 /// moved.
-pub fn separate_duplicates(objective: &Objective, set: &mut [f64], rng: &mut Rng) -> usize {
+fn separate_duplicates(objective: &Objective, set: &mut [f64], rng: &mut Rng) -> usize {
     let dims = objective.dims;
     let n = objective.n;
     let close = 1e-9 / (n as f64).sqrt();
@@ -248,7 +248,7 @@ pub fn separate_duplicates(objective: &Objective, set: &mut [f64], rng: &mut Rng
 
 /// The coordinates a Latin constraint keeps N-stratified: the first of each targeted pair (2D: the
 /// first coordinate; 4D: `x` of `xu` and `y` of `yv`).
-pub fn latin_coords(dims: usize) -> Vec<usize> {
+fn latin_coords(dims: usize) -> Vec<usize> {
     if dims == 4 {
         vec![Projection::XU.a, Projection::YV.a]
     } else {
@@ -256,7 +256,7 @@ pub fn latin_coords(dims: usize) -> Vec<usize> {
     }
 }
 
-/// Optimizes one set from `start` (`[n, dims]`, in `[0,1)`), with [`latin_coords`] held (after
+/// Optimizes one set from `start` (`[n, dims]`, in `[0,1)`), with the coordinates of `latin_coords` held (after
 /// [`latin::stratify`]) if `latin`. `rng` moves apart duplicate points. Fails with `Error::Numerical` if the start's loss is not finite.
 pub fn optimize_set(
     objective: &Objective,

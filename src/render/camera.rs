@@ -77,7 +77,7 @@ impl Camera {
     }
 
     /// Pixels per unit of image-plane slope, `H / (2 tan(fov/2))`.
-    pub fn pixels_per_slope(&self) -> f64 {
+    fn pixels_per_slope(&self) -> f64 {
         self.height / (2.0 * self.tan_y)
     }
 

@@ -151,7 +151,7 @@ impl ReferenceImage {
 }
 
 /// The cache file of a scene's reference image at `count` rays per pixel.
-pub fn reference_cache_file(scene: &Scene, count: usize, dir: &Path) -> PathBuf {
+fn reference_cache_file(scene: &Scene, count: usize, dir: &Path) -> PathBuf {
     let key = format!("v{RENDER_VERSION} {} count={count}", scene.config().key());
     dir.join(format!("image-{:016x}.npy", fnv1a(&key)))
 }
@@ -224,7 +224,17 @@ fn read_reference(file: &Path, pixels: usize, count: usize) -> Option<ReferenceI
 }
 
 /// Mean over pixels of `(image − reference)²`.
+///
+/// `image` and `reference` hold one value per pixel of the same scene, so they have the same length,
+/// which is at least 1 (scenes have 1 to 4096 pixels a side). A length mismatch panics in debug
+/// builds (in release only the common prefix is summed, still divided by `image.len()`); empty
+/// input gives NaN (0/0).
 pub fn mse(image: &[f64], reference: &[f64]) -> f64 {
+    debug_assert_eq!(
+        image.len(),
+        reference.len(),
+        "image and reference sizes differ"
+    );
     let sum: f64 = image
         .iter()
         .zip(reference)

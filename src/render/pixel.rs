@@ -9,6 +9,7 @@
 use super::scene::Scene;
 use crate::error::{Error, Result};
 use crate::integrands::{Integrand, Reference};
+use crate::stats::mean_and_stderr;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
@@ -68,13 +69,8 @@ where
             sum / per as f64
         })
         .collect();
-    let r = replicates as f64;
-    let mean = estimates.iter().sum::<f64>() / r;
-    let var = estimates.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (r - 1.0);
-    Reference {
-        value: mean,
-        stderr: (var / r).sqrt(),
-    }
+    let (value, stderr) = mean_and_stderr(estimates.iter().copied());
+    Reference { value, stderr }
 }
 
 /// FNV-1a, 64 bits: a stable hash for cache file names (std's hasher is not stable across releases).
@@ -133,7 +129,7 @@ impl PixelIntegrand {
     }
 
     /// Sets the name reported by [`Integrand::name`].
-    pub fn with_label(mut self, label: String) -> Self {
+    fn with_label(mut self, label: String) -> Self {
         self.label = label;
         self
     }

@@ -251,7 +251,7 @@ impl Scene {
 
     /// Radiance leaving a hit point towards the camera: diffuse albedo times ambient plus the point
     /// light's `cos θ / r²` when the light is visible.
-    pub fn shade(&self, hit: &Hit) -> f64 {
+    fn shade(&self, hit: &Hit) -> f64 {
         let p = hit.point + hit.normal * RAY_EPS;
         let to_light = LIGHT_POS - p;
         let r2 = to_light.length_squared();

@@ -118,7 +118,7 @@ mod tests {
         let s = slice_spectrum(f, Projection::XU, res, 4).unwrap();
         for i in 0..res {
             for j in 0..res {
-                let (k1, k2) = (j as i64 - 8, i as i64 - 8);
+                let (k1, k2) = crate::spectrum::frequency(i * res + j, res);
                 let v = s[i * res + j];
                 let expect = if (k1, k2) == (3, -2) || (k1, k2) == (-3, 2) {
                     0.25

@@ -2,7 +2,7 @@
 //! realizations, and radial / anisotropy / directional-cone profiles.
 //!
 //! Grid convention everywhere: a `K × K` row-major array with `P[i * K + j]` at `k1 = j − K/2`
-//! (first projected dimension) and `k2 = i − K/2` (second).
+//! (first projected dimension) and `k2 = i − K/2` (second); [`frequency`] maps an index to `(k1, k2)`.
 
 pub mod exact;
 pub mod expected;
@@ -13,6 +13,13 @@ use crate::error::{Error, Result};
 use nufft::Nufft2d;
 use rustfft::num_complex::Complex64;
 use std::sync::{Arc, Mutex};
+
+/// The frequency `(k1, k2)` of entry `idx = i * res + j` of a `res × res` grid: `k1 = j − res/2`,
+/// `k2 = i − res/2` (the layout of the module doc), so `k1, k2 ∈ −res/2 … res/2 − 1`.
+pub fn frequency(idx: usize, res: usize) -> (i64, i64) {
+    let half = (res / 2) as i64;
+    ((idx % res) as i64 - half, (idx / res) as i64 - half)
+}
 
 /// How Fourier sums are computed.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,17 +1,15 @@
 //! One-dimensional views of a 2D spectrum (DESIGN §3): radial mean, anisotropy, directional cones.
+//!
+//! Grids follow the layout of [`crate::spectrum`]: entry `i * K + j` holds `k1 = j − K/2` and
+//! `k2 = i − K/2` (see [`super::frequency`]).
 
 use super::expected::ExpectedSpectrum;
+use super::frequency;
 use crate::error::Result;
 use crate::output::write_atomic;
 use std::f64::consts::PI;
 use std::io::Write;
 use std::path::Path;
-
-/// The frequency `(k1, k2)` of grid bin `(i, j)` on a `res × res` grid.
-pub fn frequency(i: usize, j: usize, res: usize) -> (i64, i64) {
-    let h = (res / 2) as i64;
-    (j as i64 - h, i as i64 - h)
-}
 
 /// The radial annulus of a frequency: `r` such that `r − ½ ≤ |k| < r + ½`.
 pub fn annulus(k1: i64, k2: i64) -> usize {
@@ -57,7 +55,7 @@ pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize) -> Vec<RadialBin> {
     let mut cone_count = vec![vec![0usize; cones]; rmax];
     for i in 0..res {
         for j in 0..res {
-            let (k1, k2) = frequency(i, j, res);
+            let (k1, k2) = frequency(i * res + j, res);
             let r = annulus(k1, k2);
             if r == 0 || r >= rmax {
                 continue;

@@ -21,6 +21,7 @@
 //! ```
 
 use crate::error::{Error, Result};
+use crate::spectrum::frequency;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -36,6 +37,11 @@ pub const DARK_LEVEL: f64 = 0.05;
 /// The default weight of the dark region's mean squared error relative to the rest (see
 /// [`TargetGrid::weight`]).
 pub const DEFAULT_DARK_WEIGHT: f64 = 8.0;
+
+/// The largest `dark_weight`, as for the optimizer's other loss weights: the loss's terms are of order
+/// 1, and far larger weights stall the solver's line search (measured: from about 1e20 the sets stay
+/// where they started) or overflow the loss to infinity (about 1e308).
+pub const MAX_DARK_WEIGHT: f64 = 1e6;
 
 /// A widened hairline: dark within perpendicular distance `(half_width + opening · |k| / sqrt(N)) *
 /// sqrt(N)` of the line `k2 = shear * k1` up to `|k| = length * sqrt(N)`, and inside the disc
@@ -57,7 +63,8 @@ pub struct Hairline {
     /// Radius of the dark disc around the origin, in units of `sqrt(N)`.
     #[serde(default)]
     pub inner_radius: f64,
-    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
+    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`], at most
+    /// [`MAX_DARK_WEIGHT`]).
     #[serde(default)]
     pub dark_weight: Option<f64>,
     /// Exponent `α` of a low-frequency emphasis inside the dark region and its rim: cell `k` weighs
@@ -85,7 +92,8 @@ pub struct DoubleWedge {
     /// Radius of the dark disc around the origin, in units of `sqrt(N)`.
     #[serde(default)]
     pub inner_radius: f64,
-    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
+    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`], at most
+    /// [`MAX_DARK_WEIGHT`]).
     #[serde(default)]
     pub dark_weight: Option<f64>,
     /// Exponent `α` of a low-frequency emphasis inside the dark region and its rim: cell `k` weighs
@@ -100,7 +108,8 @@ pub struct DoubleWedge {
 pub struct BlueNoise {
     /// Radius of the dark disc, in units of `sqrt(N)`.
     pub radius: f64,
-    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
+    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`], at most
+    /// [`MAX_DARK_WEIGHT`]).
     #[serde(default)]
     pub dark_weight: Option<f64>,
     /// Exponent `α` of a low-frequency emphasis inside the dark region and its rim: cell `k` weighs
@@ -124,7 +133,8 @@ pub struct Image {
     pub file: PathBuf,
     /// Half-width of the image in normalized frequency `ν`.
     pub extent: f64,
-    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`]).
+    /// Weight of the dark region's error against the rest's (default [`DEFAULT_DARK_WEIGHT`], at most
+    /// [`MAX_DARK_WEIGHT`]).
     #[serde(default)]
     pub dark_weight: Option<f64>,
     /// Exponent `α` of a low-frequency emphasis inside the dark region and its rim: cell `k` weighs
@@ -222,9 +232,9 @@ fn non_negative(name: &str, v: f64) -> Result<()> {
 fn dark_weight(w: Option<f64>) -> Result<f64> {
     let w = w.unwrap_or(DEFAULT_DARK_WEIGHT);
     finite("dark_weight", w)?;
-    if w <= 0.0 {
+    if !(w > 0.0 && w <= MAX_DARK_WEIGHT) {
         return Err(Error::Input(format!(
-            "target parameter 'dark_weight' is {w}; it must be > 0"
+            "target parameter 'dark_weight' is {w:?}; give a number > 0 and at most {MAX_DARK_WEIGHT:e} (larger weights overflow the solver's line search)"
         )));
     }
     Ok(w)
@@ -417,7 +427,7 @@ impl Target {
 
     /// The area of the dark region in normalized frequency, i.e. its expected number of frequency
     /// cells in units of `N` (an upper bound where parts overlap).
-    pub fn dark_area(&self) -> f64 {
+    fn dark_area(&self) -> f64 {
         use std::f64::consts::PI;
         match self {
             Target::Hairline(h) => {
@@ -455,7 +465,7 @@ impl Target {
 
     /// Like [`Target::grid`] but with the fit radius (in frequency cells) given: used to judge a fit
     /// beyond the radius it was optimized over.
-    pub fn grid_within(&self, n: usize, fit_radius: f64) -> Result<TargetGrid> {
+    fn grid_within(&self, n: usize, fit_radius: f64) -> Result<TargetGrid> {
         if n < 2 {
             return Err(Error::Usage(format!(
                 "-n {n}: an optimized set needs at least 2 points"
@@ -484,8 +494,8 @@ impl Target {
         let mut inside = vec![false; res * res];
         for i in 0..res {
             for j in 0..res {
-                let (k1, k2) = (j as i64 - half, i as i64 - half);
                 let idx = i * res + j;
+                let (k1, k2) = frequency(idx, res);
                 let t = self.value(k1 as f64 / sqrt_n, k2 as f64 / sqrt_n);
                 target[idx] = t;
                 let r = (k1 as f64).hypot(k2 as f64);
@@ -525,11 +535,8 @@ impl Target {
         // Dark and rim cells share the weight `dark_weight` in proportion to `(|k| / sqrt(N))^(−α)`.
         let alpha = self.falloff();
         let emphasis = |idx: usize| {
-            let (k1, k2) = (
-                (idx % res) as f64 - half as f64,
-                (idx / res) as f64 - half as f64,
-            );
-            (k1.hypot(k2) / sqrt_n).powf(-alpha)
+            let (k1, k2) = frequency(idx, res);
+            ((k1 as f64).hypot(k2 as f64) / sqrt_n).powf(-alpha)
         };
         let dark_total: f64 = (0..res * res)
             .filter(|&idx| dark[idx] || rim[idx])
@@ -561,11 +568,8 @@ impl Target {
         let annuli = grid.annuli();
         grid.rings = (0..res * res)
             .map(|idx| {
-                let (k1, k2) = (
-                    (idx % res) as f64 - half as f64,
-                    (idx / res) as f64 - half as f64,
-                );
-                let r = k1.hypot(k2).round() as usize;
+                let (k1, k2) = frequency(idx, res);
+                let r = (k1 as f64).hypot(k2 as f64).round() as usize;
                 (grid.weight[idx] > 0.0 && !grid.dark[idx] && r < annuli).then_some(r as u32)
             })
             .collect();
@@ -579,7 +583,7 @@ fn variance_grid(v: &Variance, n: usize, res: usize, fit_radius: f64) -> Result<
     let power = v.spectrum(res)?;
     let half = (res / 2) as i64;
     let inside = |idx: usize| {
-        let (k1, k2) = ((idx % res) as i64 - half, (idx / res) as i64 - half);
+        let (k1, k2) = frequency(idx, res);
         k1 > -half && k2 > -half && (k1, k2) != (0, 0) && (k1 as f64).hypot(k2 as f64) <= fit_radius
     };
     let total: f64 = (0..res * res)
@@ -710,6 +714,26 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("half_width"));
+    }
+
+    #[test]
+    fn dark_weight_is_bounded() {
+        let with = |w: &str| {
+            Target::parse(&format!(
+                "kind = \"blue-noise\"\nradius = 0.5\ndark_weight = {w}\n"
+            ))
+        };
+        assert!(with("20000").is_ok());
+        assert!(with("1e6").is_ok());
+        for bad in ["0", "-1", "1.5e6", "1e308"] {
+            let e = with(bad).unwrap_err();
+            assert!(matches!(e, Error::Input(_)), "{bad}: {e}");
+            let m = e.to_string();
+            assert!(
+                m.contains("'dark_weight'") && m.contains("at most 1e6"),
+                "{bad}: {m}"
+            );
+        }
     }
 
     #[test]

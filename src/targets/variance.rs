@@ -313,7 +313,7 @@ mod tests {
             let mut worst: f64 = 0.0;
             for i in 1..res {
                 for j in 1..res {
-                    let (k1, k2) = (j as i64 - 9, i as i64 - 9);
+                    let (k1, k2) = crate::spectrum::frequency(i * res + j, res);
                     if (k1, k2) == (0, 0) {
                         continue;
                     }

@@ -16,7 +16,8 @@ use crate::points::{project, Projection};
 use crate::rng;
 use crate::samplers::Sampler;
 use crate::spectrum::profiles::cone_index;
-use crate::spectrum::{check_res, fourier_sums, Method};
+use crate::spectrum::{check_res, fourier_sums, frequency, Method};
+use crate::stats::mean_and_stderr;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 use std::f64::consts::TAU;
@@ -108,7 +109,6 @@ fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spe
             planes.len()
         )));
     }
-    let half = (res / 2) as i64;
     let dims = f.dims();
     let mut active = Vec::with_capacity(planes.len());
     let mut max_w: f64 = 0.0;
@@ -116,7 +116,7 @@ fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spe
         let list: Vec<(usize, f64, usize)> = (0..res * res)
             .into_par_iter()
             .filter_map(|idx| {
-                let (k1, k2) = ((idx % res) as i64 - half, (idx / res) as i64 - half);
+                let (k1, k2) = frequency(idx, res);
                 if k1 == 0 && k2 == 0 {
                     return None;
                 }
@@ -193,19 +193,19 @@ fn power_at(
         return active.iter().map(|e| sums[e.0].norm_sqr() / n).collect();
     }
     // Distinct columns and rows used, and each active frequency's position among them.
-    let half = (res / 2) as i64;
     let mut col = vec![usize::MAX; res];
     let mut row = vec![usize::MAX; res];
     let (mut k1s, mut k2s) = (Vec::new(), Vec::new());
     for e in active {
         let (j, i) = (e.0 % res, e.0 / res);
+        let (k1, k2) = frequency(e.0, res);
         if col[j] == usize::MAX {
             col[j] = k1s.len();
-            k1s.push(j as i64 - half);
+            k1s.push(k1);
         }
         if row[i] == usize::MAX {
             row[i] = k2s.len();
-            k2s.push(i as i64 - half);
+            k2s.push(k2);
         }
     }
     let at: Vec<(usize, usize)> = active
@@ -260,13 +260,6 @@ fn realizations(
         .collect()
 }
 
-fn mean_se(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
-    let r = v.clone().count() as f64;
-    let m = v.clone().sum::<f64>() / r;
-    let var = v.map(|x| (x - m).powi(2)).sum::<f64>() / (r - 1.0);
-    (m, (var / r).sqrt())
-}
-
 /// Predicts the variance of `sampler` on `f` for every `N` of `ns`.
 pub fn predict(
     sampler: &dyn Sampler,
@@ -289,11 +282,11 @@ pub fn predict(
         }
         let spec = &spec.as_ref().expect("computed above").1;
         let per = realizations(sampler, spec, n, res, cfg);
-        let (grid, stderr) = mean_se(per.iter().map(|p| p.0));
+        let (grid, stderr) = mean_and_stderr(per.iter().map(|p| p.0));
         let mut cones = Vec::with_capacity(cfg.cones);
         let mut cone_stderr = Vec::with_capacity(cfg.cones);
         for c in 0..cfg.cones {
-            let (m, s) = mean_se(per.iter().map(|p| p.1[c]));
+            let (m, s) = mean_and_stderr(per.iter().map(|p| p.1[c]));
             cones.push(m);
             cone_stderr.push(s);
         }

@@ -1,5 +1,5 @@
-//! Gauss–Legendre quadrature on intervals, for the integrands whose integrals or Fourier coefficients
-//! have no closed form (the fan of edges).
+//! Gauss–Legendre quadrature on intervals: for the integrands whose integrals or Fourier coefficients
+//! have no closed form (the fan of edges), and for the NUFFT's deconvolution factors.
 
 use std::f64::consts::PI;
 
@@ -89,6 +89,16 @@ mod tests {
         let v: f64 = integrate(&rule, 0.0, 2.0, &[], 1, |x| x.powi(23));
         let exact = 2f64.powi(24) / 24.0;
         assert!((v - exact).abs() / exact < 1e-13, "{v} vs {exact}");
+    }
+
+    #[test]
+    fn odd_rule_is_exact_to_degree_2m_minus_1() {
+        let rule = gauss_legendre(7);
+        // Exact for degree ≤ 13: ∫_{-1}^{1} x^12 = 2/13.
+        let s: f64 = rule.iter().map(|&(x, w)| w * x.powi(12)).sum();
+        assert!((s - 2.0 / 13.0).abs() < 1e-15, "{s}");
+        let total: f64 = rule.iter().map(|r| r.1).sum();
+        assert!((total - 2.0).abs() < 1e-15);
     }
 
     #[test]

@@ -973,3 +973,105 @@ fn lattice_designs_are_written_as_tables() {
         }
     }
 }
+
+/// An output file whose folder does not exist is refused (exit 2, naming the folder), and the folder is
+/// not made; the other outputs of the command are not written either.
+#[test]
+fn missing_output_folders_are_refused_not_made() {
+    let (dir, input) = tmp("pts.npy");
+    let i = input.to_str().unwrap();
+    let o = anisospec(&["sample", "--sampler", "random", "-n", "16", "-o", i]);
+    assert!(o.status.success());
+    let missing = dir.path().join("nodir");
+    let deep = missing.join("deeper/a.png");
+    let deep_npy = missing.join("deeper/a.npy");
+    let fine = dir.path().join("fine.npy");
+    let radial = missing.join("r.csv");
+    let cases: [(Vec<&str>, &Path); 3] = [
+        (
+            vec![
+                "spectrum",
+                "--input",
+                i,
+                "--res",
+                "8",
+                "-o",
+                deep.to_str().unwrap(),
+            ],
+            &deep,
+        ),
+        (
+            vec![
+                "spectrum",
+                "--input",
+                i,
+                "--res",
+                "8",
+                "-o",
+                fine.to_str().unwrap(),
+                "--radial",
+                radial.to_str().unwrap(),
+            ],
+            &fine,
+        ),
+        (
+            vec![
+                "sample",
+                "--sampler",
+                "random",
+                "-n",
+                "16",
+                "-o",
+                deep_npy.to_str().unwrap(),
+            ],
+            &deep_npy,
+        ),
+    ];
+    for (args, out) in &cases {
+        rejects(args, "does not exist; create it first", out);
+        let err = String::from_utf8_lossy(&anisospec(args).stderr).into_owned();
+        assert!(
+            err.contains(&format!("folder {}", missing.display())),
+            "{args:?}: {err}"
+        );
+        assert!(!missing.exists(), "{args:?} made {}", missing.display());
+    }
+}
+
+/// An output in a folder that takes no file is refused before any work with exit 2, naming the folder
+/// and the operating system's reason, never the temporary file the check made.
+#[cfg(target_os = "linux")]
+#[test]
+fn unwritable_output_folders_are_named() {
+    for args in [
+        vec![
+            "sample",
+            "--sampler",
+            "random",
+            "-n",
+            "16",
+            "-o",
+            "/proc/z.npy",
+        ],
+        vec![
+            "spectrum",
+            "--sampler",
+            "random",
+            "-n",
+            "16",
+            "--res",
+            "8",
+            "-o",
+            "/proc/z.png",
+        ],
+    ] {
+        let o = anisospec(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("cannot write to /proc: ") && err.contains("choose a writable folder"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains(".anisospec-"), "{args:?}: {err}");
+    }
+}

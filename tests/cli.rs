@@ -1075,3 +1075,158 @@ fn unwritable_output_folders_are_named() {
         assert!(!err.contains(".anisospec-"), "{args:?}: {err}");
     }
 }
+
+/// Flags that a command would ignore are refused at parse time (exit 2, naming them): the sampler's
+/// flags with a point file, the shear's mode without a shear, the sampler's flags with render's
+/// reference, the oracle shear's options without --shear. Nothing is written.
+#[test]
+fn flags_that_would_be_ignored_are_refused() {
+    let (dir, input) = tmp("pts.npy");
+    let i = input.to_str().unwrap();
+    let o = anisospec(&["sample", "--sampler", "random", "-n", "16", "-o", i]);
+    assert!(o.status.success());
+    let out = dir.path().join("out.npy");
+    let img = dir.path().join("img.exr");
+    let (o, im) = (out.to_str().unwrap(), img.to_str().unwrap());
+    let spectrum = |flags: &[&'static str]| {
+        let mut v = vec!["spectrum", "--input", i, "--res", "8", "-o", o];
+        v.extend(flags);
+        v
+    };
+    let cases: Vec<(Vec<&str>, &str, &Path)> = vec![
+        (
+            spectrum(&["-n", "16"]),
+            "'--input <INPUT>' cannot be used with '--n",
+            &out,
+        ),
+        (
+            spectrum(&["--seed", "3"]),
+            "cannot be used with '--seed",
+            &out,
+        ),
+        (
+            spectrum(&["--dims", "4"]),
+            "cannot be used with '--dims",
+            &out,
+        ),
+        (
+            spectrum(&["--sampler", "mj"]),
+            "cannot be used with '--sampler",
+            &out,
+        ),
+        (
+            spectrum(&["--shear", "0.5,0.5"]),
+            "cannot be used with '--shear",
+            &out,
+        ),
+        (
+            spectrum(&["--shear-mode", "wrap"]),
+            "cannot be used with '--shear-mode",
+            &out,
+        ),
+        (
+            vec![
+                "sample",
+                "--sampler",
+                "random",
+                "-n",
+                "16",
+                "--shear-mode",
+                "wrap",
+                "-o",
+                o,
+            ],
+            "--shear",
+            &out,
+        ),
+        (
+            vec!["render", "--reference", "--sampler", "padded-mj", "-o", im],
+            "'--reference' cannot be used with '--sampler",
+            &img,
+        ),
+        (
+            vec!["render", "--reference", "--spp", "16", "-o", im],
+            "'--reference' cannot be used with '--spp",
+            &img,
+        ),
+        (
+            vec!["render", "--reference", "--shear", "-o", im],
+            "'--reference' cannot be used with '--shear",
+            &img,
+        ),
+        (
+            vec![
+                "render",
+                "--sampler",
+                "padded-mj",
+                "--wedge-shear",
+                "none",
+                "-o",
+                im,
+            ],
+            "required arguments were not provided:\n  --shear",
+            &img,
+        ),
+        (
+            vec![
+                "render",
+                "--sampler",
+                "padded-mj",
+                "--shear-mode",
+                "wrap",
+                "-o",
+                im,
+            ],
+            "required arguments were not provided:\n  --shear",
+            &img,
+        ),
+    ];
+    for (args, needle, file) in &cases {
+        rejects(args, needle, file);
+    }
+}
+
+/// `spectrum --stderr` over one realization would write an all-zero standard error: refused, whether
+/// the one realization is asked for or is all the point file holds; `--realizations 0` names the flag.
+#[test]
+fn spectrum_stderr_needs_two_realizations() {
+    let (dir, one) = tmp("one.npy");
+    let i = one.to_str().unwrap();
+    let o = anisospec(&["sample", "--sampler", "random", "-n", "16", "-o", i]);
+    assert!(o.status.success());
+    let out = dir.path().join("s.npy");
+    let se = dir.path().join("se.npy");
+    let (o, s) = (out.to_str().unwrap(), se.to_str().unwrap());
+    let sampler = ["spectrum", "--sampler", "random", "-n", "16", "--res", "8"];
+    let mut asked = sampler.to_vec();
+    asked.extend(["--realizations", "1", "--stderr", s, "-o", o]);
+    rejects(&asked, "--stderr needs 2 or more realizations", &out);
+    rejects(
+        &[
+            "spectrum", "--input", i, "--res", "8", "--stderr", s, "-o", o,
+        ],
+        "one.npy holds one set",
+        &out,
+    );
+    assert!(!se.exists());
+    for source in [&sampler[..], &["spectrum", "--input", i, "--res", "8"]] {
+        let mut args = source.to_vec();
+        args.extend(["--realizations", "0", "-o", o]);
+        rejects(&args, "--realizations 0 averages nothing", &out);
+    }
+    // Two realizations give a standard error that is positive off k = 0.
+    let mut two = sampler.to_vec();
+    two.extend(["--realizations", "2", "--stderr", s, "-o", o]);
+    let run = anisospec(&two);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let bytes = std::fs::read(&se).unwrap();
+    let values: Vec<f64> = npyz::NpyFile::new(&bytes[..]).unwrap().into_vec().unwrap();
+    assert!(
+        values.iter().filter(|&&v| v > 0.0).count() > 32,
+        "{values:?}"
+    );
+}

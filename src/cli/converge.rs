@@ -29,13 +29,8 @@ pub struct ConvergeArgs {
     /// then taken against each placement's own integral.
     #[arg(long)]
     pub random_placement: bool,
-    /// Shear every (4D) sampler by sx in xu and sy in yv (written sx,sy), e.g. the oracle's shear of
-    /// the integrand; the toroidal shift moves the pattern before it is sheared.
-    #[arg(long, value_parser = crate::cli::parse_shear, allow_hyphen_values = true)]
-    pub shear: Option<(f64, f64)>,
-    /// How --shear is applied: transported (seam-free, default) or wrap.
-    #[arg(long, value_parser = crate::cli::parse_shear_mode, default_value = "transported")]
-    pub shear_mode: crate::points::shear::ShearMode,
+    #[command(flatten)]
+    pub shear: crate::cli::ShearArgs,
     /// Write the results as CSV (sampler, integrand, n, mse, mse_stderr, mean_error, seconds,
     /// evaluations, slope, slope_ci_low, slope_ci_high).
     #[arg(short = 'o', long)]
@@ -79,8 +74,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         .sampler
         .iter()
         .map(|name| {
-            let s =
-                crate::cli::sampler_with_shear(name.trim(), f.dims(), args.shear, args.shear_mode)?;
+            let s = crate::cli::sampler_with_shear(name.trim(), f.dims(), &args.shear)?;
             crate::converge::check_plan(s.as_ref(), f.as_ref(), &args.n, args.realizations)?;
             Ok(s)
         })

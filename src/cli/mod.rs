@@ -17,20 +17,36 @@ use crate::points::shear::ShearMode;
 use crate::samplers::{self, Sampler};
 use std::path::{Path, PathBuf};
 
-/// Builds the sampler `name` in `dims` dimensions, sheared by `shear = (sx, sy)` if given (4D only).
-pub fn sampler_with_shear(
-    name: &str,
-    dims: usize,
-    shear: Option<(f64, f64)>,
-    mode: ShearMode,
-) -> Result<Box<dyn Sampler>> {
+/// `--shear sx,sy` and `--shear-mode`: a constant shear of a 4D sampler's sets (sample, spectrum,
+/// converge; render's `--shear` is the per-pixel oracle's instead).
+#[derive(Clone, Debug, clap::Args)]
+pub struct ShearArgs {
+    /// Shear the 4D sets by sx in xu and sy in yv (written sx,sy; negative ones as
+    /// --shear=-0.5,-0.5), aligning their spectra with a defocused pixel's, e.g. the oracle's shear of
+    /// the integrand. Where a set is randomly shifted (converge), the shift moves the pattern before
+    /// it is sheared.
+    #[arg(long, value_parser = parse_shear, allow_hyphen_values = true)]
+    pub shear: Option<(f64, f64)>,
+    /// How --shear is applied: transported (seam-free, exactly uniform on the square; default) or wrap
+    /// (x − s u mod 1, which adds a seam on non-periodic integrands).
+    #[arg(long, value_parser = parse_shear_mode, default_value = "transported", requires = "shear")]
+    pub shear_mode: ShearMode,
+}
+
+/// Builds the sampler `name` in `dims` dimensions, sheared as `shear` asks (4D only).
+pub fn sampler_with_shear(name: &str, dims: usize, shear: &ShearArgs) -> Result<Box<dyn Sampler>> {
     let inner = samplers::build(name, dims)?;
-    match shear {
+    match shear.shear {
         None => Ok(inner),
         Some(_) if dims != 4 => Err(Error::Usage(
             "--shear applies to the xu and yv projections of 4D sets; ask for 4D sets (--dims 4 in sample and spectrum, a 4D integrand such as sheared:s=0.5@xu in converge)".into(),
         )),
-        Some((sx, sy)) => Ok(Box::new(samplers::Sheared::new(inner, sx, sy, mode)?)),
+        Some((sx, sy)) => Ok(Box::new(samplers::Sheared::new(
+            inner,
+            sx,
+            sy,
+            shear.shear_mode,
+        )?)),
     }
 }
 

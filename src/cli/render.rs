@@ -22,7 +22,7 @@ pub struct RenderArgs {
     pub scene: Option<PathBuf>,
     /// 4D sampler (see `anisospec samplers`), e.g. random, oa, sobol, padded-mj, xuyv-mj, or
     /// table:PATH (optimized sets), or lattice:Z1:Z2:Z3:Z4 (a rank-1 lattice with that generating
-    /// vector). Not needed with --reference.
+    /// vector). Not used with --reference.
     #[arg(long, required_unless_present = "reference")]
     pub sampler: Option<String>,
     /// Samples (rays) per pixel; must be a count the sampler allows.
@@ -31,19 +31,21 @@ pub struct RenderArgs {
     /// Seed: pixel i uses stream i of it for its set and its toroidal shift.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// `oracle`: shear each pixel's points by the depth oracle's shear in xu and yv.
-    #[arg(long, value_parser = ["oracle"])]
-    pub shear: Option<String>,
-    /// How the shear is applied: transported (seam-free inverse-CDF transport, default) or wrap
-    /// (x' = x - s u mod 1).
-    #[arg(long, default_value = "transported", value_parser = crate::cli::parse_shear_mode)]
-    pub shear_mode: ShearMode,
-    /// Shear of double-wedge (occluder) pixels: centre (default: the shear of the depth at the pixel
-    /// and lens centres, measured better on the whole image) or none.
-    #[arg(long, value_enum, default_value_t = WedgeShear::Centre)]
-    pub wedge_shear: WedgeShear,
-    /// Write the high-count reference image (channels Y and stderr) instead of a sampled one.
+    /// Shear each pixel's points by the depth oracle's shear in xu and yv (the scene needs an
+    /// aperture).
     #[arg(long)]
+    pub shear: bool,
+    /// How --shear is applied: transported (seam-free inverse-CDF transport, default) or wrap
+    /// (x' = x - s u mod 1).
+    #[arg(long, default_value = "transported", value_parser = crate::cli::parse_shear_mode, requires = "shear")]
+    pub shear_mode: ShearMode,
+    /// With --shear, the shear of double-wedge (occluder) pixels: centre (default: the shear of the
+    /// depth at the pixel and lens centres, measured better on the whole image) or none.
+    #[arg(long, value_enum, default_value_t = WedgeShear::Centre, requires = "shear")]
+    pub wedge_shear: WedgeShear,
+    /// Write the high-count reference image (channels Y and stderr) instead of a sampled one; the
+    /// sampler's flags (--sampler, --spp, --seed, --shear) do not apply.
+    #[arg(long, conflicts_with_all = ["sampler", "spp", "seed", "shear"])]
     pub reference: bool,
     /// Rays per pixel of the reference (a power of two, 1024 to 16777216), in independent
     /// Owen-scrambled Sobol sets whose spread gives its standard error. Every render computes the
@@ -108,12 +110,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let name = args.sampler.as_deref().unwrap_or_default();
     let sampler = samplers::build(name, 4)?;
     samplers::validate_n(sampler.as_ref(), args.spp)?;
-    let shears = match args.shear {
-        Some(_) => {
-            require_aperture(&scene, "--shear oracle")?;
-            Some(oracle_shears(&oracle_image(&scene)?, args.wedge_shear))
-        }
-        None => None,
+    let shears = if args.shear {
+        require_aperture(&scene, "--shear")?;
+        Some(oracle_shears(&oracle_image(&scene)?, args.wedge_shear))
+    } else {
+        None
     };
     let reference = reference_of("reference image")?;
     let start = Instant::now();
@@ -128,9 +129,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     )?;
     let seconds = start.elapsed().as_secs_f64();
     let (exr, png) = write_image_pair(&args.output, w, h, &[("Y", &image)])?;
-    let shear = match args.shear {
-        Some(_) => format!("sheared by the oracle ({:?})", args.shear_mode).to_lowercase(),
-        None => "unsheared".into(),
+    let shear = if args.shear {
+        format!("sheared by the oracle ({:?})", args.shear_mode).to_lowercase()
+    } else {
+        "unsheared".into()
     };
     println!(
         "{name} {shear}, {} spp: MSE {:.4e} against the reference ({} rays per pixel, its own noise \

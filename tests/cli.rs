@@ -1230,3 +1230,104 @@ fn spectrum_stderr_needs_two_realizations() {
         "{values:?}"
     );
 }
+
+/// Commands that write a fixed set of files beside `-o` (render, oracle, pixel-spectrum) refuse an
+/// extension they would not write, naming the files they do write, before any work; the one-format
+/// outputs of the other commands name the extension to use.
+#[test]
+fn output_names_must_match_what_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let at = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let (png, txt, npy, csv) = (at("o.png"), at("p.txt"), at("r.npy"), at("c.txt"));
+    let cases: Vec<(Vec<&str>, String, String)> = vec![
+        (
+            vec!["oracle", "-o", &png],
+            format!(
+                "the outputs are {} and {}, not a .png",
+                at("o.exr"),
+                at("o.npy")
+            ),
+            at("o.exr"),
+        ),
+        (
+            vec!["pixel-spectrum", "--pixel", "20,20", "-o", &txt],
+            format!("{}, {} and {}", at("p.npy"), at("p.exr"), at("p.png")),
+            at("p.npy"),
+        ),
+        (
+            vec!["render", "--sampler", "padded-mj", "-o", &npy],
+            "name -o with .exr or .png, or with no extension".into(),
+            at("r.exr"),
+        ),
+        (
+            vec!["oracle", "-o", "/"],
+            "has no usable file name".into(),
+            at("o.npy"),
+        ),
+        (
+            vec![
+                "converge",
+                "--sampler",
+                "mj",
+                "--integrand",
+                "disc",
+                "-n",
+                "16,64",
+                "-o",
+                &csv,
+            ],
+            "name it .csv (-o writes a CSV table)".into(),
+            csv.clone(),
+        ),
+        (
+            vec![
+                "variance",
+                "--sampler",
+                "mj",
+                "--integrand",
+                "disc",
+                "-n",
+                "16",
+                "-o",
+                &csv,
+            ],
+            "name it .csv".into(),
+            csv.clone(),
+        ),
+    ];
+    for (args, needle, file) in &cases {
+        rejects(args, needle, Path::new(file));
+    }
+    // Without an extension, or with one of its own, the oracle writes both files.
+    for (given, stem) in [("plain", "plain"), ("named.npy", "named")] {
+        let o = anisospec(&["oracle", "-o", &at(given)]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        for ext in ["exr", "npy"] {
+            assert!(
+                dir.path().join(format!("{stem}.{ext}")).exists(),
+                "{stem}.{ext}"
+            );
+        }
+    }
+}
+
+/// `oracle` checks its outputs before it computes anything: with a scene the oracle cannot be made
+/// for (a pinhole camera) and an output it cannot write, the output is what is reported.
+#[test]
+fn oracle_checks_outputs_before_the_oracle() {
+    let (dir, scene) = tmp("pinhole.toml");
+    std::fs::write(&scene, "aperture = 0.0\n").unwrap();
+    let s = scene.to_str().unwrap();
+    let out = dir.path().join("nodir/o.exr");
+    rejects(
+        &["oracle", "--scene", s, "-o", out.to_str().unwrap()],
+        "does not exist",
+        &out,
+    );
+    let here = dir.path().join("o.exr");
+    rejects(
+        &["oracle", "--scene", s, "-o", here.to_str().unwrap()],
+        "aperture",
+        &here,
+    );
+}

@@ -1,7 +1,7 @@
 //! `anisospec converge`: the empirical convergence test of one or more samplers on an integrand.
 
 use crate::converge::{converge, plot, write_csv, ConvergeConfig, Convergence};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::integrands::parse;
 use std::path::PathBuf;
 
@@ -40,22 +40,14 @@ pub struct ConvergeArgs {
     pub plot: Option<PathBuf>,
 }
 
-fn check_ext(path: &Option<PathBuf>, ext: &str, flag: &str) -> Result<()> {
-    if let Some(p) = path {
-        if p.extension().and_then(|e| e.to_str()) != Some(ext) {
-            return Err(Error::Usage(format!(
-                "{flag} {}: name the file *.{ext}",
-                p.display()
-            )));
-        }
-    }
-    Ok(())
-}
-
 /// Runs every sampler, prints a table per sampler, writes the CSV and the plot.
 pub fn run(args: &ConvergeArgs) -> Result<()> {
-    check_ext(&args.output, "csv", "-o")?;
-    check_ext(&args.plot, "png", "--plot")?;
+    if let Some(csv) = &args.output {
+        crate::cli::require_extension(csv, "-o", "csv", "a CSV table")?;
+    }
+    if let Some(png) = &args.plot {
+        crate::cli::require_extension(png, "--plot", "png", "a PNG picture")?;
+    }
     let inputs: Vec<PathBuf> = args
         .sampler
         .iter()

@@ -94,6 +94,53 @@ pub fn image_kinds(outputs: &[PathBuf]) -> Result<Vec<ImageKind>> {
         .collect()
 }
 
+/// Checks that the file `path` given to `flag` is named `.ext`, the one format `flag` writes (`what`,
+/// e.g. "a CSV table").
+pub fn require_extension(path: &Path, flag: &str, ext: &str, what: &str) -> Result<()> {
+    if extension(path).as_deref() == Some(ext) {
+        return Ok(());
+    }
+    Err(Error::Usage(format!(
+        "{flag} {}: name it .{ext} ({flag} writes {what})",
+        path.display()
+    )))
+}
+
+/// The files a command writes beside one another from `-o output`, one per extension of `exts` (e.g.
+/// `out/oracle.exr` and `out/oracle.npy`). `output` may carry one of `exts` or no extension; a path
+/// with no file name, or with another extension (which would not be written), is a usage error
+/// naming the files and the fix.
+pub fn sibling_outputs(output: &Path, exts: &[&str]) -> Result<Vec<PathBuf>> {
+    if output.file_name().is_none() {
+        return Err(Error::Usage(format!(
+            "-o {} has no usable file name; give a path such as out/image.{}",
+            output.display(),
+            exts[0]
+        )));
+    }
+    let files: Vec<PathBuf> = exts.iter().map(|e| output.with_extension(e)).collect();
+    if let Some(ext) = extension(output).filter(|x| !exts.contains(&x.as_str())) {
+        let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+        let dotted: Vec<String> = exts.iter().map(|e| format!(".{e}")).collect();
+        return Err(Error::Usage(format!(
+            "-o {}: the outputs are {}, not a .{ext}; name -o with {}, or with no extension",
+            output.display(),
+            spoken_list(&names, "and"),
+            spoken_list(&dotted, "or")
+        )));
+    }
+    Ok(files)
+}
+
+/// `a, b and c` (with `word` = "and").
+fn spoken_list(items: &[String], word: &str) -> String {
+    match items {
+        [] => String::new(),
+        [one] => one.clone(),
+        [rest @ .., last] => format!("{} {word} {last}", rest.join(", ")),
+    }
+}
+
 /// The lower-case extension of a path.
 pub fn extension(path: &Path) -> Option<String> {
     path.extension()

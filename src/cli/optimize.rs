@@ -94,12 +94,12 @@ const MAX_SECONDS: f64 = 1e9;
 const MAX_WEIGHT: f64 = 1e6;
 
 fn check_args(args: &OptimizeArgs) -> Result<()> {
-    if args.output.extension().and_then(|e| e.to_str()) != Some("npy") {
-        return Err(Error::Usage(format!(
-            "-o {}: the table is written as numpy; name it .npy (the .txt, .h, .json and .log.csv go next to it)",
-            args.output.display()
-        )));
-    }
+    crate::cli::require_extension(
+        &args.output,
+        "-o",
+        "npy",
+        "the table as numpy, and the .txt, .h, .json and .log.csv next to it",
+    )?;
     if args.n < 2 {
         return Err(Error::Usage(format!(
             "-n {}: an optimized set needs at least 2 points",
@@ -143,18 +143,13 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
     Ok(())
 }
 
-/// The sibling of `out` with another extension, e.g. `table.npy` → `table.json`.
-fn sibling(out: &Path, ext: &str) -> PathBuf {
-    out.with_extension(ext)
-}
-
 /// Runs `anisospec optimize`.
 pub fn run(args: &OptimizeArgs) -> Result<()> {
     check_args(args)?;
     let target = Target::load(&args.target)?;
     let outputs: Vec<PathBuf> = ["npy", "txt", "h", "json", "log.csv"]
         .iter()
-        .map(|e| sibling(&args.output, e))
+        .map(|e| args.output.with_extension(e))
         .collect();
     let mut inputs = vec![args.target.clone()];
     if let Target::Image(img) = &target {

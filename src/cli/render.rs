@@ -1,7 +1,7 @@
 //! `anisospec render`: the depth-of-field image with any 4D sampler, optionally sheared per pixel by
 //! the depth oracle, its MSE against a high-count reference, and the reference itself.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::points::shear::ShearMode;
 use crate::render::image::{
     mse, oracle_shears, reference_image, render_image, write_image_pair, WedgeShear,
@@ -57,7 +57,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub cache: Option<PathBuf>,
     /// Output image; IMG.exr (float radiance, channel Y) and IMG.png (preview, gamma 2.2, white at
-    /// 0.5) are written, whatever the extension given.
+    /// 0.5) are written: name it IMG.exr, IMG.png or IMG.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
 }
@@ -67,21 +67,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = Scene::load(args.scene.as_deref())?;
     let (w, h) = (scene.width(), scene.height());
     let cache = args.cache.clone().unwrap_or_else(default_cache_dir);
-    if args.output.with_extension("exr") == args.output.with_extension("png") {
-        return Err(Error::Usage(format!(
-            "-o {} has no usable file name; give a path such as out/render.exr",
-            args.output.display()
-        )));
-    }
     let mut inputs: Vec<PathBuf> = args.scene.iter().cloned().collect();
     inputs.extend(samplers::input_files(
         args.sampler.as_deref().unwrap_or_default(),
     ));
-    let (exr, png) = (
-        args.output.with_extension("exr"),
-        args.output.with_extension("png"),
-    );
-    crate::output::check_outputs(&[&exr, &png], &inputs)?;
+    let files = crate::cli::sibling_outputs(&args.output, &["exr", "png"])?;
+    crate::output::check_outputs(&[&files[0], &files[1]], &inputs)?;
     let reference_of = |what: &str| {
         let bar = crate::progress::bar(h as u64, what);
         reference_image(&scene, args.ref_count, Some(&cache), &bar)

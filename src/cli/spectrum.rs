@@ -1,6 +1,6 @@
 //! `anisospec spectrum`: the expected power spectrum of a sampler or of a point file, in any projection.
 
-use super::{image_kinds, sampler_with_shear, ImageKind, ShearArgs};
+use super::{image_kinds, require_extension, sampler_with_shear, ImageKind, ShearArgs};
 use crate::error::{Error, Result};
 use crate::output::image::{write_spectrum_exr, write_spectrum_png};
 use crate::output::{check_outputs, write_npy};
@@ -85,12 +85,7 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
         (&args.stderr, "--stderr", "npy", "an npy array"),
     ] {
         if let Some(path) = extra {
-            if path.extension().and_then(|e| e.to_str()) != Some(ext) {
-                return Err(Error::Usage(format!(
-                    "{flag} {}: name it .{ext} ({flag} writes {what})",
-                    path.display()
-                )));
-            }
+            require_extension(path, flag, ext, what)?;
         }
     }
     match args.realizations {

@@ -1,7 +1,7 @@
 //! `anisospec variance`: the Fourier-domain variance prediction of a sampler on an integrand, with the
 //! directional-cone breakdown and the predicted slope.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::integrands::parse;
 use crate::samplers;
 use crate::spectrum::Method;
@@ -51,14 +51,7 @@ pub struct VarianceArgs {
 /// Runs the prediction and prints it.
 pub fn run(args: &VarianceArgs) -> Result<()> {
     if let Some(out) = &args.output {
-        if out.extension().and_then(|e| e.to_str()) != Some("csv") {
-            return Err(Error::Usage(format!(
-                "-o {}: the prediction is written as CSV; name it *.csv",
-                out.display()
-            )));
-        }
-    }
-    if let Some(out) = &args.output {
+        crate::cli::require_extension(out, "-o", "csv", "the prediction as a CSV table")?;
         crate::output::check_outputs(&[out], &samplers::input_files(&args.sampler))?;
     }
     let f = parse(&args.integrand)?;

@@ -1331,3 +1331,93 @@ fn oracle_checks_outputs_before_the_oracle() {
         &here,
     );
 }
+
+/// `optimize --sets 0` is refused up front, naming the flag, also for a lattice design (whose search
+/// would otherwise run first).
+#[test]
+fn optimize_refuses_no_sets_before_any_work() {
+    let (dir, out) = tmp("t.npy");
+    let target = dir.path().join("fan.toml");
+    std::fs::write(
+        &target,
+        "kind = \"variance\"\nintegrand = \"fan:s0=0.3,s1=0.7\"\nshear = 0.5\nplacements = 2\nextent = 2.0\ndesign = \"lattice\"\n",
+    )
+    .unwrap();
+    for t in [target.to_str().unwrap(), "targets/blue-noise.toml"] {
+        let args = [
+            "optimize",
+            "--target",
+            t,
+            "--dims",
+            "4",
+            "-n",
+            "64",
+            "--sets",
+            "0",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        rejects(&args, "--sets 0 asks for nothing", &out);
+        let err = String::from_utf8_lossy(&anisospec(&args).stderr).into_owned();
+        assert!(!err.contains("searching"), "{t}: {err}");
+    }
+}
+
+/// Two optimized tables' C headers can be included in one C file (and each twice): the include guard,
+/// the macros and the array are named after the file, `anisospec_` and its stem as a C identifier.
+#[test]
+fn c_headers_of_two_tables_live_in_one_file() {
+    let dir = tempfile::tempdir().unwrap();
+    for (file, sets) in [("Fan-A.npy", "2"), ("2nd table.npy", "1")] {
+        let o = anisospec(&[
+            "optimize",
+            "--target",
+            "targets/blue-noise.toml",
+            "-n",
+            "16",
+            "--sets",
+            sets,
+            "--max-iters",
+            "3",
+            "-o",
+            dir.path().join(file).to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let a = std::fs::read_to_string(dir.path().join("Fan-A.h")).unwrap();
+    let b = std::fs::read_to_string(dir.path().join("2nd table.h")).unwrap();
+    for (text, name, sets) in [(&a, "anisospec_fan_a", 2), (&b, "anisospec_2nd_table", 1)] {
+        let upper = name.to_uppercase();
+        for line in [
+            format!("#ifndef {upper}_H"),
+            format!("#define {upper}_SETS {sets}"),
+            format!("#define {upper}_N 16"),
+            format!("#define {upper}_DIMS 2"),
+            format!("static const double {name}[{sets}][16][2] = {{"),
+        ] {
+            assert!(
+                text.lines().any(|l| l == line),
+                "{name}: no '{line}' in\n{text}"
+            );
+        }
+    }
+    let Ok(cc) = Command::new("cc").arg("--version").output() else {
+        return; // No C compiler here: the names above are what it would see.
+    };
+    assert!(cc.status.success());
+    let c = dir.path().join("both.c");
+    std::fs::write(
+        &c,
+        "#include \"Fan-A.h\"\n#include \"2nd table.h\"\n#include \"Fan-A.h\"\n\
+         _Static_assert(sizeof anisospec_fan_a == ANISOSPEC_FAN_A_SETS * ANISOSPEC_FAN_A_N * ANISOSPEC_FAN_A_DIMS * sizeof(double), \"a\");\n\
+         _Static_assert(ANISOSPEC_2ND_TABLE_SETS == 1 && ANISOSPEC_FAN_A_SETS == 2, \"sets\");\n\
+         double corner(void) { return anisospec_fan_a[1][15][1] + anisospec_2nd_table[0][0][0]; }\n",
+    )
+    .unwrap();
+    let o = Command::new("cc")
+        .current_dir(dir.path())
+        .args(["-std=c11", "-c", "both.c", "-o", "both.o"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

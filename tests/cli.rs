@@ -1421,3 +1421,35 @@ fn c_headers_of_two_tables_live_in_one_file() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// `optimize` without --seed uses seed 1, as every other command: the same table as --seed 1, another
+/// than --seed 0, and the sidecar says 1.
+#[test]
+fn optimize_seeds_with_1_by_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = |name: &str, seed: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "optimize",
+            "--target",
+            "targets/blue-noise.toml",
+            "-n",
+            "16",
+            "--max-iters",
+            "3",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend(seed);
+        let o = anisospec(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(&out).unwrap()
+    };
+    let default = table("default.npy", &[]);
+    assert_eq!(default, table("one.npy", &["--seed", "1"]));
+    assert_ne!(default, table("zero.npy", &["--seed", "0"]));
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("default.json")).unwrap())
+            .unwrap();
+    assert_eq!(sidecar["parameters"]["seed"], 1);
+}

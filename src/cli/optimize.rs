@@ -36,8 +36,8 @@ pub struct OptimizeArgs {
     /// Number of sets; they are optimized in parallel, set s from random stream s of the seed.
     #[arg(long, default_value_t = 1)]
     pub sets: usize,
-    /// Seed of the random starts.
-    #[arg(long, default_value_t = 0)]
+    /// Seed of the random starts (default 1, as in every other command).
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Output table, `.npy` ([sets, N, D] float64); the same numbers go to `.txt`, `.h`, a `.json`
     /// sidecar and a `.log.csv` next to it. The C header's array is named after the file:

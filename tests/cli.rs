@@ -1453,3 +1453,60 @@ fn optimize_seeds_with_1_by_default() {
             .unwrap();
     assert_eq!(sidecar["parameters"]["seed"], 1);
 }
+
+/// A rank-1 lattice whose generating vector shares a factor with N (0 included) would repeat points or
+/// values in a coordinate: refused in every command, naming the entry and a coprime one.
+#[test]
+fn degenerate_lattice_generators_are_refused() {
+    let (_dir, out) = tmp("l.npy");
+    let o = out.to_str().unwrap();
+    let cases: [(Vec<&str>, &str); 4] = [
+        (
+            vec!["sample", "--sampler", "lattice:0:0", "-n", "8", "-o", o],
+            "the entry 0 for x shares the factor 8 with N = 8",
+        ),
+        (
+            vec!["sample", "--sampler", "lattice:1:4", "-n", "8", "-o", o],
+            "so y takes only 2 distinct values; give an entry coprime to 8 instead, e.g. 3",
+        ),
+        (
+            vec![
+                "spectrum",
+                "--sampler",
+                "lattice:1:163:271:141",
+                "--dims",
+                "4",
+                "--shear",
+                "0.5,0.5",
+                "-n",
+                "9",
+                "--res",
+                "8",
+                "-o",
+                o,
+            ],
+            "the entry 141 for v shares the factor 3",
+        ),
+        (
+            vec![
+                "converge",
+                "--sampler",
+                "lattice:1:3,lattice:1:2",
+                "--integrand",
+                "disc",
+                "-n",
+                "16,64",
+            ],
+            "the entry 2 for y shares the factor 2 with N = 16",
+        ),
+    ];
+    for (args, needle) in &cases {
+        rejects(args, needle, &out);
+    }
+    let ok = anisospec(&["sample", "--sampler", "lattice:1:34", "-n", "89", "-o", o]);
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+}

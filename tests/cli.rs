@@ -1510,3 +1510,121 @@ fn degenerate_lattice_generators_are_refused() {
         String::from_utf8_lossy(&ok.stderr)
     );
 }
+
+/// A point count that is not a positive integer is named as such (not taken for an unknown flag), in
+/// every command that takes one; a list of N that repeats one is refused.
+#[test]
+fn counts_must_be_positive_and_distinct() {
+    let (_dir, out) = tmp("x.npy");
+    let o = out.to_str().unwrap();
+    let csv = out.with_extension("csv");
+    let c = csv.to_str().unwrap();
+    let cases: [(Vec<&str>, &str, &Path); 7] = [
+        (
+            vec!["sample", "--sampler", "mj", "-n", "-5", "-o", o],
+            "N must be a positive integer (1 or more), not -5",
+            &out,
+        ),
+        (
+            vec!["sample", "--sampler", "mj", "-n", "0", "-o", o],
+            "N must be a positive integer",
+            &out,
+        ),
+        (
+            vec!["spectrum", "--sampler", "mj", "-n", "-16", "-o", o],
+            "N must be a positive integer",
+            &out,
+        ),
+        (
+            vec![
+                "converge",
+                "--sampler",
+                "mj",
+                "--integrand",
+                "disc",
+                "-n",
+                "16,-64",
+                "-o",
+                c,
+            ],
+            "not -64",
+            &csv,
+        ),
+        (
+            vec!["render", "--sampler", "padded-mj", "--spp", "-4", "-o", o],
+            "N must be a positive integer",
+            &out,
+        ),
+        (
+            vec![
+                "converge",
+                "--sampler",
+                "mj",
+                "--integrand",
+                "disc",
+                "-n",
+                "16,16",
+                "-o",
+                c,
+            ],
+            "-n lists 16 twice",
+            &csv,
+        ),
+        (
+            vec![
+                "variance",
+                "--sampler",
+                "mj",
+                "--integrand",
+                "disc",
+                "-n",
+                "16,64,16",
+                "-o",
+                c,
+            ],
+            "-n lists 16 twice",
+            &csv,
+        ),
+    ];
+    for (args, needle, file) in &cases {
+        rejects(args, needle, file);
+    }
+}
+
+/// converge's table: through two N no chi2/dof is printed (no degree of freedom is left), through three
+/// it is; the time column says it covers all R realizations.
+#[test]
+fn converge_prints_no_chi2_without_degrees_of_freedom() {
+    let run = |ns: &str| {
+        let o = anisospec(&[
+            "converge",
+            "--sampler",
+            "random",
+            "--integrand",
+            "disc",
+            "-n",
+            ns,
+            "--realizations",
+            "8",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let two = run("16,64");
+    assert!(two.contains("chi2/dof —"), "{two}");
+    assert!(!two.contains("chi2/dof 0.00"), "{two}");
+    let three = run("16,64,256");
+    let chi2: f64 = three
+        .split("chi2/dof ")
+        .nth(1)
+        .and_then(|rest| rest.split(')').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no chi2/dof number in {three}"));
+    assert!(chi2.is_finite() && chi2 >= 0.0, "{three}");
+    for table in [&two, &three] {
+        assert!(
+            table.contains("seconds(R)") && table.contains("all R realizations"),
+            "{table}"
+        );
+    }
+}

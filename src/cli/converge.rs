@@ -17,9 +17,16 @@ pub struct ConvergeArgs {
     #[arg(long)]
     pub integrand: String,
     /// Sample counts N, comma-separated, e.g. 16,64,256,1024,4096.
-    #[arg(short = 'n', long = "n", value_delimiter = ',', required = true)]
+    #[arg(
+        short = 'n',
+        long = "n",
+        value_delimiter = ',',
+        required = true,
+        value_parser = crate::cli::parse_count,
+        allow_negative_numbers = true
+    )]
     pub n: Vec<usize>,
-    /// Realizations per N: each an independent set with its own random toroidal shift.
+    /// Realizations per N (R): each an independent set with its own random toroidal shift.
     #[arg(long, default_value_t = 100)]
     pub realizations: usize,
     /// Random seed: the same seed gives the same numbers whatever the thread count.
@@ -32,7 +39,8 @@ pub struct ConvergeArgs {
     #[command(flatten)]
     pub shear: crate::cli::ShearArgs,
     /// Write the results as CSV (sampler, integrand, n, mse, mse_stderr, mean_error, seconds,
-    /// evaluations, slope, slope_ci_low, slope_ci_high).
+    /// evaluations, slope, slope_ci_low, slope_ci_high); seconds, as in the printed table, is the wall
+    /// time of all R realizations at that N, not of one.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
     /// Write a log-log plot of MSE against N (PNG), one line per sampler, slopes in the legend.
@@ -59,6 +67,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         .chain(&args.plot)
         .map(PathBuf::as_path)
         .collect();
+    crate::cli::distinct_counts(&args.n)?;
     crate::output::check_outputs(&outputs, &inputs)?;
     let f = parse(&args.integrand)?;
     // Build and check every sampler before any work starts.
@@ -84,13 +93,19 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
     }
     bar.finish_and_clear();
     println!(
-        "integrand {} (integral {:.12e}), R = {}",
+        "integrand {} (integral {:.12e}), R = {}; seconds: wall time of all R realizations at an N",
         f.name(),
         f.reference().value,
         args.realizations
     );
     for s in &studies {
         match &s.fit {
+            // Through two N the line fits exactly: no degree of freedom is left to measure the scatter
+            // (chi2/dof), and the interval holds only the two points' own errors, not a curvature.
+            Some(fit) if s.points.len() == 2 => println!(
+                "{}: slope {:.3} (95% CI {:.3} .. {:.3} from the two points' errors alone, chi2/dof —: give three or more N to test the fit)",
+                s.sampler, fit.slope, fit.ci95.0, fit.ci95.1
+            ),
             Some(fit) => println!(
                 "{}: slope {:.3} (95% CI {:.3} .. {:.3}, chi2/dof {:.2})",
                 s.sampler, fit.slope, fit.ci95.0, fit.ci95.1, fit.chi2_per_dof
@@ -98,12 +113,12 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             None => println!("{}:", s.sampler),
         }
         println!(
-            "{:>8} {:>12} {:>10} {:>10}",
-            "N", "MSE", "stderr", "seconds"
+            "{:>8} {:>12} {:>10} {:>12}",
+            "N", "MSE", "stderr", "seconds(R)"
         );
         for p in &s.points {
             println!(
-                "{:>8} {:>12.4e} {:>10.2e} {:>10.3}",
+                "{:>8} {:>12.4e} {:>10.2e} {:>12.3}",
                 p.n, p.mse, p.mse_stderr, p.seconds
             );
         }

@@ -62,6 +62,34 @@ pub fn parse_shear(text: &str) -> std::result::Result<(f64, f64), String> {
     }
 }
 
+/// Parses a point count N (`-n`, `--spp`): a positive integer. Negative numbers reach this parser
+/// (the flags allow them) so that `-n -5` is answered here rather than as an unknown flag.
+pub fn parse_count(text: &str) -> std::result::Result<usize, String> {
+    match text.trim().parse::<i128>() {
+        Ok(v) if v >= 1 => usize::try_from(v)
+            .map_err(|_| format!("{text} is above the largest count, {}", usize::MAX)),
+        Ok(_) => Err(format!(
+            "N must be a positive integer (1 or more), not {text}"
+        )),
+        Err(_) => Err(format!(
+            "'{text}' is not a whole number; N must be a positive integer, e.g. 64"
+        )),
+    }
+}
+
+/// Checks that a list of N (`-n 16,64,256`) names each N once: a repeat would measure the same thing
+/// twice and print it as two rows.
+pub fn distinct_counts(ns: &[usize]) -> Result<()> {
+    for (i, n) in ns.iter().enumerate() {
+        if ns[..i].contains(n) {
+            return Err(Error::Usage(format!(
+                "-n lists {n} twice; give each N once (e.g. -n 16,64,256)"
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Parses `--shear-mode`.
 pub fn parse_shear_mode(text: &str) -> std::result::Result<ShearMode, String> {
     ShearMode::parse(text).map_err(|e| e.to_string())

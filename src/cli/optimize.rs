@@ -31,7 +31,7 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = 2)]
     pub dims: usize,
     /// Points per set.
-    #[arg(short = 'n', long)]
+    #[arg(short = 'n', long, value_parser = super::parse_count, allow_negative_numbers = true)]
     pub n: usize,
     /// Number of sets; they are optimized in parallel, set s from random stream s of the seed.
     #[arg(long, default_value_t = 1)]

@@ -19,7 +19,7 @@ pub struct SampleArgs {
     pub dims: usize,
     /// Points per set, N. Samplers with a construction constraint (e.g. jittered needs a square) name
     /// the nearest valid N if this one is not.
-    #[arg(short = 'n', long = "n")]
+    #[arg(short = 'n', long = "n", value_parser = super::parse_count, allow_negative_numbers = true)]
     pub n: usize,
     /// Number of independent sets to draw.
     #[arg(long, default_value_t = 1)]

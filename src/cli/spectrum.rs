@@ -28,7 +28,13 @@ pub struct SpectrumArgs {
     #[arg(long, default_value_t = 2)]
     pub dims: usize,
     /// Points per set (with --sampler).
-    #[arg(short = 'n', long = "n", required_unless_present = "input")]
+    #[arg(
+        short = 'n',
+        long = "n",
+        required_unless_present = "input",
+        value_parser = super::parse_count,
+        allow_negative_numbers = true
+    )]
     pub n: Option<usize>,
     /// Projection: two of x,y,u,v (xy, uv, xu, yv, ...) or two dimension indices (0,2).
     /// The first is the horizontal frequency k1, the second the vertical k2.

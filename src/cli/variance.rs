@@ -18,7 +18,14 @@ pub struct VarianceArgs {
     #[arg(long)]
     pub integrand: String,
     /// Sample counts N, comma-separated, e.g. 16,64,256,1024.
-    #[arg(short = 'n', long = "n", value_delimiter = ',', required = true)]
+    #[arg(
+        short = 'n',
+        long = "n",
+        value_delimiter = ',',
+        required = true,
+        value_parser = crate::cli::parse_count,
+        allow_negative_numbers = true
+    )]
     pub n: Vec<usize>,
     /// Frequency grid side K (even) in each projection; the rest of the sum is estimated as white noise
     /// (Parseval) and reported as the tail.
@@ -50,6 +57,7 @@ pub struct VarianceArgs {
 
 /// Runs the prediction and prints it.
 pub fn run(args: &VarianceArgs) -> Result<()> {
+    crate::cli::distinct_counts(&args.n)?;
     if let Some(out) = &args.output {
         crate::cli::require_extension(out, "-o", "csv", "the prediction as a CSV table")?;
         crate::output::check_outputs(&[out], &samplers::input_files(&args.sampler))?;

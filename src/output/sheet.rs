@@ -27,8 +27,7 @@ const TITLE: usize = 34;
 const GAP: usize = 8;
 
 /// Writes `panels` in rows of `columns` under `title` (its long numbers shortened, as in plots) as an
-/// RGB PNG, with the tone map stated in a
-/// footer line.
+/// RGB PNG, with the tone map stated in a footer line.
 pub fn write_sheet(path: &Path, title: &str, panels: &[Panel], columns: usize) -> Result<()> {
     if panels.is_empty() || columns == 0 {
         return Err(Error::Numerical(format!(

@@ -256,7 +256,7 @@ fn log_ticks(lo: f64, hi: f64, pixels: f64) -> Vec<f64> {
 /// The label of a tick at `v`: a whole number as it is (up to 9999999), anything else by
 /// [`short_number`].
 fn tick_label(v: f64) -> String {
-    if v >= 1.0 && v < 1e7 && v.fract() == 0.0 {
+    if (1.0..1e7).contains(&v) && v.fract() == 0.0 {
         format!("{v:.0}")
     } else {
         short_number(v)

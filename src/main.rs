@@ -64,7 +64,8 @@ fn main() -> ExitCode {
             );
             println!(
                 "lattice:Z    2D,4D  rank-1 lattice with the generating vector Z you give, e.g. \
-                 lattice:1:34 or lattice:1:163:271:141 (entries taken mod N), randomly shifted  \
+                 lattice:1:34 or lattice:1:163:271:141 (entries taken mod N, each coprime to N), randomly \
+                 shifted  \
                  [N: any N <= 2^20]"
             );
             Ok(())

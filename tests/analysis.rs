@@ -380,8 +380,10 @@ fn commands_write_csv_and_plot_and_refuse_bad_input() {
         realizations: 50,
         seed: 1,
         random_placement: false,
-        shear: None,
-        shear_mode: anisospec::points::shear::ShearMode::Transported,
+        shear: anisospec::cli::ShearArgs {
+            shear: None,
+            shear_mode: anisospec::points::shear::ShearMode::Transported,
+        },
         output: Some(csv.clone()),
         plot: Some(png.clone()),
     };

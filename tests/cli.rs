@@ -972,3 +972,658 @@ fn lattice_designs_are_written_as_tables() {
         }
     }
 }
+
+/// An output file whose folder does not exist is refused (exit 2, naming the folder), and the folder is
+/// not made; the other outputs of the command are not written either.
+#[test]
+fn missing_output_folders_are_refused_not_made() {
+    let (dir, input) = tmp("pts.npy");
+    let i = input.to_str().unwrap();
+    let o = anisospec(&["sample", "--sampler", "random", "-n", "16", "-o", i]);
+    assert!(o.status.success());
+    let missing = dir.path().join("nodir");
+    let deep = missing.join("deeper/a.png");
+    let deep_npy = missing.join("deeper/a.npy");
+    let fine = dir.path().join("fine.npy");
+    let radial = missing.join("r.csv");
+    let cases: [(Vec<&str>, &Path); 3] = [
+        (
+            vec![
+                "spectrum",
+                "--input",
+                i,
+                "--res",
+                "8",
+                "-o",
+                deep.to_str().unwrap(),
+            ],
+            &deep,
+        ),
+        (
+            vec![
+                "spectrum",
+                "--input",
+                i,
+                "--res",
+                "8",
+                "-o",
+                fine.to_str().unwrap(),
+                "--radial",
+                radial.to_str().unwrap(),
+            ],
+            &fine,
+        ),
+        (
+            vec![
+                "sample",
+                "--sampler",
+                "random",
+                "-n",
+                "16",
+                "-o",
+                deep_npy.to_str().unwrap(),
+            ],
+            &deep_npy,
+        ),
+    ];
+    for (args, out) in &cases {
+        rejects(args, "does not exist; create it first", out);
+        let err = String::from_utf8_lossy(&anisospec(args).stderr).into_owned();
+        assert!(
+            err.contains(&format!("folder {}", missing.display())),
+            "{args:?}: {err}"
+        );
+        assert!(!missing.exists(), "{args:?} made {}", missing.display());
+    }
+}
+
+/// An output in a folder that takes no file is refused before any work with exit 2, naming the folder
+/// and the operating system's reason, never the temporary file the check made.
+#[cfg(target_os = "linux")]
+#[test]
+fn unwritable_output_folders_are_named() {
+    for args in [
+        vec![
+            "sample",
+            "--sampler",
+            "random",
+            "-n",
+            "16",
+            "-o",
+            "/proc/z.npy",
+        ],
+        vec![
+            "spectrum",
+            "--sampler",
+            "random",
+            "-n",
+            "16",
+            "--res",
+            "8",
+            "-o",
+            "/proc/z.png",
+        ],
+    ] {
+        let o = anisospec(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("cannot write to /proc: ") && err.contains("choose a writable folder"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains(".anisospec-"), "{args:?}: {err}");
+    }
+}
+
+/// Flags that a command would ignore are refused at parse time (exit 2, naming them): the sampler's
+/// flags with a point file, the shear's mode without a shear, the sampler's flags with render's
+/// reference, the oracle shear's options without --shear. Nothing is written.
+#[test]
+fn flags_that_would_be_ignored_are_refused() {
+    let (dir, input) = tmp("pts.npy");
+    let i = input.to_str().unwrap();
+    let o = anisospec(&["sample", "--sampler", "random", "-n", "16", "-o", i]);
+    assert!(o.status.success());
+    let out = dir.path().join("out.npy");
+    let img = dir.path().join("img.exr");
+    let (o, im) = (out.to_str().unwrap(), img.to_str().unwrap());
+    let spectrum = |flags: &[&'static str]| {
+        let mut v = vec!["spectrum", "--input", i, "--res", "8", "-o", o];
+        v.extend(flags);
+        v
+    };
+    let cases: Vec<(Vec<&str>, &str, &Path)> = vec![
+        (
+            spectrum(&["-n", "16"]),
+            "'--input <INPUT>' cannot be used with '--n",
+            &out,
+        ),
+        (
+            spectrum(&["--seed", "3"]),
+            "cannot be used with '--seed",
+            &out,
+        ),
+        (
+            spectrum(&["--dims", "4"]),
+            "cannot be used with '--dims",
+            &out,
+        ),
+        (
+            spectrum(&["--sampler", "mj"]),
+            "cannot be used with '--sampler",
+            &out,
+        ),
+        (
+            spectrum(&["--shear", "0.5,0.5"]),
+            "cannot be used with '--shear",
+            &out,
+        ),
+        (
+            spectrum(&["--shear-mode", "wrap"]),
+            "cannot be used with '--shear-mode",
+            &out,
+        ),
+        (
+            vec![
+                "sample",
+                "--sampler",
+                "random",
+                "-n",
+                "16",
+                "--shear-mode",
+                "wrap",
+                "-o",
+                o,
+            ],
+            "--shear",
+            &out,
+        ),
+        (
+            vec!["render", "--reference", "--sampler", "padded-mj", "-o", im],
+            "'--reference' cannot be used with '--sampler",
+            &img,
+        ),
+        (
+            vec!["render", "--reference", "--spp", "16", "-o", im],
+            "'--reference' cannot be used with '--spp",
+            &img,
+        ),
+        (
+            vec!["render", "--reference", "--shear", "-o", im],
+            "'--reference' cannot be used with '--shear",
+            &img,
+        ),
+        (
+            vec![
+                "render",
+                "--sampler",
+                "padded-mj",
+                "--wedge-shear",
+                "none",
+                "-o",
+                im,
+            ],
+            "required arguments were not provided:\n  --shear",
+            &img,
+        ),
+        (
+            vec![
+                "render",
+                "--sampler",
+                "padded-mj",
+                "--shear-mode",
+                "wrap",
+                "-o",
+                im,
+            ],
+            "required arguments were not provided:\n  --shear",
+            &img,
+        ),
+    ];
+    for (args, needle, file) in &cases {
+        rejects(args, needle, file);
+    }
+}
+
+/// `spectrum --stderr` over one realization would write an all-zero standard error: refused, whether
+/// the one realization is asked for or is all the point file holds; `--realizations 0` names the flag.
+#[test]
+fn spectrum_stderr_needs_two_realizations() {
+    let (dir, one) = tmp("one.npy");
+    let i = one.to_str().unwrap();
+    let o = anisospec(&["sample", "--sampler", "random", "-n", "16", "-o", i]);
+    assert!(o.status.success());
+    let out = dir.path().join("s.npy");
+    let se = dir.path().join("se.npy");
+    let (o, s) = (out.to_str().unwrap(), se.to_str().unwrap());
+    let sampler = ["spectrum", "--sampler", "random", "-n", "16", "--res", "8"];
+    let mut asked = sampler.to_vec();
+    asked.extend(["--realizations", "1", "--stderr", s, "-o", o]);
+    rejects(&asked, "--stderr needs 2 or more realizations", &out);
+    rejects(
+        &[
+            "spectrum", "--input", i, "--res", "8", "--stderr", s, "-o", o,
+        ],
+        "one.npy holds one set",
+        &out,
+    );
+    assert!(!se.exists());
+    for source in [&sampler[..], &["spectrum", "--input", i, "--res", "8"]] {
+        let mut args = source.to_vec();
+        args.extend(["--realizations", "0", "-o", o]);
+        rejects(&args, "--realizations 0 averages nothing", &out);
+    }
+    // Two realizations give a standard error that is positive off k = 0.
+    let mut two = sampler.to_vec();
+    two.extend(["--realizations", "2", "--stderr", s, "-o", o]);
+    let run = anisospec(&two);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let bytes = std::fs::read(&se).unwrap();
+    let values: Vec<f64> = npyz::NpyFile::new(&bytes[..]).unwrap().into_vec().unwrap();
+    assert!(
+        values.iter().filter(|&&v| v > 0.0).count() > 32,
+        "{values:?}"
+    );
+}
+
+/// Commands that write a fixed set of files beside `-o` (render, oracle, pixel-spectrum) refuse an
+/// extension they would not write, naming the files they do write, before any work; the one-format
+/// outputs of the other commands name the extension to use.
+#[test]
+fn output_names_must_match_what_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let at = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let (png, txt, npy, csv) = (at("o.png"), at("p.txt"), at("r.npy"), at("c.txt"));
+    let cases: Vec<(Vec<&str>, String, String)> = vec![
+        (
+            vec!["oracle", "-o", &png],
+            format!(
+                "the outputs are {} and {}, not a .png",
+                at("o.exr"),
+                at("o.npy")
+            ),
+            at("o.exr"),
+        ),
+        (
+            vec!["pixel-spectrum", "--pixel", "20,20", "-o", &txt],
+            format!("{}, {} and {}", at("p.npy"), at("p.exr"), at("p.png")),
+            at("p.npy"),
+        ),
+        (
+            vec!["render", "--sampler", "padded-mj", "-o", &npy],
+            "name -o with .exr or .png, or with no extension".into(),
+            at("r.exr"),
+        ),
+        (
+            vec!["oracle", "-o", "/"],
+            "has no usable file name".into(),
+            at("o.npy"),
+        ),
+        (
+            vec![
+                "converge",
+                "--sampler",
+                "mj",
+                "--integrand",
+                "disc",
+                "-n",
+                "16,64",
+                "-o",
+                &csv,
+            ],
+            "name it .csv (-o writes a CSV table)".into(),
+            csv.clone(),
+        ),
+        (
+            vec![
+                "variance",
+                "--sampler",
+                "mj",
+                "--integrand",
+                "disc",
+                "-n",
+                "16",
+                "-o",
+                &csv,
+            ],
+            "name it .csv".into(),
+            csv.clone(),
+        ),
+    ];
+    for (args, needle, file) in &cases {
+        rejects(args, needle, Path::new(file));
+    }
+    // Without an extension, or with one of its own, the oracle writes both files.
+    for (given, stem) in [("plain", "plain"), ("named.npy", "named")] {
+        let o = anisospec(&["oracle", "-o", &at(given)]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        for ext in ["exr", "npy"] {
+            assert!(
+                dir.path().join(format!("{stem}.{ext}")).exists(),
+                "{stem}.{ext}"
+            );
+        }
+    }
+}
+
+/// `oracle` checks its outputs before it computes anything: with a scene the oracle cannot be made
+/// for (a pinhole camera) and an output it cannot write, the output is what is reported.
+#[test]
+fn oracle_checks_outputs_before_the_oracle() {
+    let (dir, scene) = tmp("pinhole.toml");
+    std::fs::write(&scene, "aperture = 0.0\n").unwrap();
+    let s = scene.to_str().unwrap();
+    let out = dir.path().join("nodir/o.exr");
+    rejects(
+        &["oracle", "--scene", s, "-o", out.to_str().unwrap()],
+        "does not exist",
+        &out,
+    );
+    let here = dir.path().join("o.exr");
+    rejects(
+        &["oracle", "--scene", s, "-o", here.to_str().unwrap()],
+        "aperture",
+        &here,
+    );
+}
+
+/// `optimize --sets 0` is refused up front, naming the flag, also for a lattice design (whose search
+/// would otherwise run first).
+#[test]
+fn optimize_refuses_no_sets_before_any_work() {
+    let (dir, out) = tmp("t.npy");
+    let target = dir.path().join("fan.toml");
+    std::fs::write(
+        &target,
+        "kind = \"variance\"\nintegrand = \"fan:s0=0.3,s1=0.7\"\nshear = 0.5\nplacements = 2\nextent = 2.0\ndesign = \"lattice\"\n",
+    )
+    .unwrap();
+    for t in [target.to_str().unwrap(), "targets/blue-noise.toml"] {
+        let args = [
+            "optimize",
+            "--target",
+            t,
+            "--dims",
+            "4",
+            "-n",
+            "64",
+            "--sets",
+            "0",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        rejects(&args, "--sets 0 asks for nothing", &out);
+        let err = String::from_utf8_lossy(&anisospec(&args).stderr).into_owned();
+        assert!(!err.contains("searching"), "{t}: {err}");
+    }
+}
+
+/// Two optimized tables' C headers can be included in one C file (and each twice): the include guard,
+/// the macros and the array are named after the file, `anisospec_` and its stem as a C identifier.
+#[test]
+fn c_headers_of_two_tables_live_in_one_file() {
+    let dir = tempfile::tempdir().unwrap();
+    for (file, sets) in [("Fan-A.npy", "2"), ("2nd table.npy", "1")] {
+        let o = anisospec(&[
+            "optimize",
+            "--target",
+            "targets/blue-noise.toml",
+            "-n",
+            "16",
+            "--sets",
+            sets,
+            "--max-iters",
+            "3",
+            "-o",
+            dir.path().join(file).to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let a = std::fs::read_to_string(dir.path().join("Fan-A.h")).unwrap();
+    let b = std::fs::read_to_string(dir.path().join("2nd table.h")).unwrap();
+    for (text, name, sets) in [(&a, "anisospec_fan_a", 2), (&b, "anisospec_2nd_table", 1)] {
+        let upper = name.to_uppercase();
+        for line in [
+            format!("#ifndef {upper}_H"),
+            format!("#define {upper}_SETS {sets}"),
+            format!("#define {upper}_N 16"),
+            format!("#define {upper}_DIMS 2"),
+            format!("static const double {name}[{sets}][16][2] = {{"),
+        ] {
+            assert!(
+                text.lines().any(|l| l == line),
+                "{name}: no '{line}' in\n{text}"
+            );
+        }
+    }
+    let Ok(cc) = Command::new("cc").arg("--version").output() else {
+        return; // No C compiler here: the names above are what it would see.
+    };
+    assert!(cc.status.success());
+    let c = dir.path().join("both.c");
+    std::fs::write(
+        &c,
+        "#include \"Fan-A.h\"\n#include \"2nd table.h\"\n#include \"Fan-A.h\"\n\
+         _Static_assert(sizeof anisospec_fan_a == ANISOSPEC_FAN_A_SETS * ANISOSPEC_FAN_A_N * ANISOSPEC_FAN_A_DIMS * sizeof(double), \"a\");\n\
+         _Static_assert(ANISOSPEC_2ND_TABLE_SETS == 1 && ANISOSPEC_FAN_A_SETS == 2, \"sets\");\n\
+         double corner(void) { return anisospec_fan_a[1][15][1] + anisospec_2nd_table[0][0][0]; }\n",
+    )
+    .unwrap();
+    let o = Command::new("cc")
+        .current_dir(dir.path())
+        .args(["-std=c11", "-c", "both.c", "-o", "both.o"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// `optimize` without --seed uses seed 1, as every other command: the same table as --seed 1, another
+/// than --seed 0, and the sidecar says 1.
+#[test]
+fn optimize_seeds_with_1_by_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = |name: &str, seed: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "optimize",
+            "--target",
+            "targets/blue-noise.toml",
+            "-n",
+            "16",
+            "--max-iters",
+            "3",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend(seed);
+        let o = anisospec(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(&out).unwrap()
+    };
+    let default = table("default.npy", &[]);
+    assert_eq!(default, table("one.npy", &["--seed", "1"]));
+    assert_ne!(default, table("zero.npy", &["--seed", "0"]));
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("default.json")).unwrap())
+            .unwrap();
+    assert_eq!(sidecar["parameters"]["seed"], 1);
+}
+
+/// A rank-1 lattice whose generating vector shares a factor with N (0 included) would repeat points or
+/// values in a coordinate: refused in every command, naming the entry and a coprime one.
+#[test]
+fn degenerate_lattice_generators_are_refused() {
+    let (_dir, out) = tmp("l.npy");
+    let o = out.to_str().unwrap();
+    let cases: [(Vec<&str>, &str); 4] = [
+        (
+            vec!["sample", "--sampler", "lattice:0:0", "-n", "8", "-o", o],
+            "the entry 0 for x shares the factor 8 with N = 8",
+        ),
+        (
+            vec!["sample", "--sampler", "lattice:1:4", "-n", "8", "-o", o],
+            "so y takes only 2 distinct values; give an entry coprime to 8 instead, e.g. 3",
+        ),
+        (
+            vec![
+                "spectrum",
+                "--sampler",
+                "lattice:1:163:271:141",
+                "--dims",
+                "4",
+                "--shear",
+                "0.5,0.5",
+                "-n",
+                "9",
+                "--res",
+                "8",
+                "-o",
+                o,
+            ],
+            "the entry 141 for v shares the factor 3",
+        ),
+        (
+            vec![
+                "converge",
+                "--sampler",
+                "lattice:1:3,lattice:1:2",
+                "--integrand",
+                "disc",
+                "-n",
+                "16,64",
+            ],
+            "the entry 2 for y shares the factor 2 with N = 16",
+        ),
+    ];
+    for (args, needle) in &cases {
+        rejects(args, needle, &out);
+    }
+    let ok = anisospec(&["sample", "--sampler", "lattice:1:34", "-n", "89", "-o", o]);
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+}
+
+/// A point count that is not a positive integer is named as such (not taken for an unknown flag), in
+/// every command that takes one; a list of N that repeats one is refused.
+#[test]
+fn counts_must_be_positive_and_distinct() {
+    let (_dir, out) = tmp("x.npy");
+    let o = out.to_str().unwrap();
+    let csv = out.with_extension("csv");
+    let c = csv.to_str().unwrap();
+    let cases: [(Vec<&str>, &str, &Path); 7] = [
+        (
+            vec!["sample", "--sampler", "mj", "-n", "-5", "-o", o],
+            "N must be a positive integer (1 or more), not -5",
+            &out,
+        ),
+        (
+            vec!["sample", "--sampler", "mj", "-n", "0", "-o", o],
+            "N must be a positive integer",
+            &out,
+        ),
+        (
+            vec!["spectrum", "--sampler", "mj", "-n", "-16", "-o", o],
+            "N must be a positive integer",
+            &out,
+        ),
+        (
+            vec![
+                "converge",
+                "--sampler",
+                "mj",
+                "--integrand",
+                "disc",
+                "-n",
+                "16,-64",
+                "-o",
+                c,
+            ],
+            "not -64",
+            &csv,
+        ),
+        (
+            vec!["render", "--sampler", "padded-mj", "--spp", "-4", "-o", o],
+            "N must be a positive integer",
+            &out,
+        ),
+        (
+            vec![
+                "converge",
+                "--sampler",
+                "mj",
+                "--integrand",
+                "disc",
+                "-n",
+                "16,16",
+                "-o",
+                c,
+            ],
+            "-n lists 16 twice",
+            &csv,
+        ),
+        (
+            vec![
+                "variance",
+                "--sampler",
+                "mj",
+                "--integrand",
+                "disc",
+                "-n",
+                "16,64,16",
+                "-o",
+                c,
+            ],
+            "-n lists 16 twice",
+            &csv,
+        ),
+    ];
+    for (args, needle, file) in &cases {
+        rejects(args, needle, file);
+    }
+}
+
+/// converge's table: through two N no chi2/dof is printed (no degree of freedom is left), through three
+/// it is; the time column says it covers all R realizations.
+#[test]
+fn converge_prints_no_chi2_without_degrees_of_freedom() {
+    let run = |ns: &str| {
+        let o = anisospec(&[
+            "converge",
+            "--sampler",
+            "random",
+            "--integrand",
+            "disc",
+            "-n",
+            ns,
+            "--realizations",
+            "8",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let two = run("16,64");
+    assert!(two.contains("chi2/dof —"), "{two}");
+    assert!(!two.contains("chi2/dof 0.00"), "{two}");
+    let three = run("16,64,256");
+    let chi2: f64 = three
+        .split("chi2/dof ")
+        .nth(1)
+        .and_then(|rest| rest.split(')').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no chi2/dof number in {three}"));
+    assert!(chi2.is_finite() && chi2 >= 0.0, "{three}");
+    for table in [&two, &three] {
+        assert!(
+            table.contains("seconds(R)") && table.contains("all R realizations"),
+            "{table}"
+        );
+    }
+}

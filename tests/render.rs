@@ -305,7 +305,7 @@ fn bad_input_is_reported_with_exit_code_two() {
             sampler: Some(name.into()),
             spp,
             seed: 1,
-            shear: shear.then(|| "oracle".to_string()),
+            shear,
             shear_mode: ShearMode::Transported,
             wedge_shear: Default::default(),
             reference: false,

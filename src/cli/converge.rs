@@ -1,7 +1,7 @@
 //! `anisospec converge`: the empirical convergence test of one or more samplers on an integrand.
 
 use crate::converge::{converge, plot, write_csv, ConvergeConfig, Convergence};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::integrands::parse;
 use std::path::PathBuf;
 
@@ -17,9 +17,16 @@ pub struct ConvergeArgs {
     #[arg(long)]
     pub integrand: String,
     /// Sample counts N, comma-separated, e.g. 16,64,256,1024,4096.
-    #[arg(short = 'n', long = "n", value_delimiter = ',', required = true)]
+    #[arg(
+        short = 'n',
+        long = "n",
+        value_delimiter = ',',
+        required = true,
+        value_parser = crate::cli::parse_count,
+        allow_negative_numbers = true
+    )]
     pub n: Vec<usize>,
-    /// Realizations per N: each an independent set with its own random toroidal shift.
+    /// Realizations per N (R): each an independent set with its own random toroidal shift.
     #[arg(long, default_value_t = 100)]
     pub realizations: usize,
     /// Random seed: the same seed gives the same numbers whatever the thread count.
@@ -29,15 +36,11 @@ pub struct ConvergeArgs {
     /// then taken against each placement's own integral.
     #[arg(long)]
     pub random_placement: bool,
-    /// Shear every (4D) sampler by sx in xu and sy in yv (written sx,sy), e.g. the oracle's shear of
-    /// the integrand; the toroidal shift moves the pattern before it is sheared.
-    #[arg(long, value_parser = crate::cli::parse_shear, allow_hyphen_values = true)]
-    pub shear: Option<(f64, f64)>,
-    /// How --shear is applied: transported (seam-free, default) or wrap.
-    #[arg(long, value_parser = crate::cli::parse_shear_mode, default_value = "transported")]
-    pub shear_mode: crate::points::shear::ShearMode,
+    #[command(flatten)]
+    pub shear: crate::cli::ShearArgs,
     /// Write the results as CSV (sampler, integrand, n, mse, mse_stderr, mean_error, seconds,
-    /// evaluations, slope, slope_ci_low, slope_ci_high).
+    /// evaluations, slope, slope_ci_low, slope_ci_high); seconds, as in the printed table, is the wall
+    /// time of all R realizations at that N, not of one.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
     /// Write a log-log plot of MSE against N (PNG), one line per sampler, slopes in the legend.
@@ -45,22 +48,14 @@ pub struct ConvergeArgs {
     pub plot: Option<PathBuf>,
 }
 
-fn check_ext(path: &Option<PathBuf>, ext: &str, flag: &str) -> Result<()> {
-    if let Some(p) = path {
-        if p.extension().and_then(|e| e.to_str()) != Some(ext) {
-            return Err(Error::Usage(format!(
-                "{flag} {}: name the file *.{ext}",
-                p.display()
-            )));
-        }
-    }
-    Ok(())
-}
-
 /// Runs every sampler, prints a table per sampler, writes the CSV and the plot.
 pub fn run(args: &ConvergeArgs) -> Result<()> {
-    check_ext(&args.output, "csv", "-o")?;
-    check_ext(&args.plot, "png", "--plot")?;
+    if let Some(csv) = &args.output {
+        crate::cli::require_extension(csv, "-o", "csv", "a CSV table")?;
+    }
+    if let Some(png) = &args.plot {
+        crate::cli::require_extension(png, "--plot", "png", "a PNG picture")?;
+    }
     let inputs: Vec<PathBuf> = args
         .sampler
         .iter()
@@ -72,6 +67,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         .chain(&args.plot)
         .map(PathBuf::as_path)
         .collect();
+    crate::cli::distinct_counts(&args.n)?;
     crate::output::check_outputs(&outputs, &inputs)?;
     let f = parse(&args.integrand)?;
     // Build and check every sampler before any work starts.
@@ -79,8 +75,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         .sampler
         .iter()
         .map(|name| {
-            let s =
-                crate::cli::sampler_with_shear(name.trim(), f.dims(), args.shear, args.shear_mode)?;
+            let s = crate::cli::sampler_with_shear(name.trim(), f.dims(), &args.shear)?;
             crate::converge::check_plan(s.as_ref(), f.as_ref(), &args.n, args.realizations)?;
             Ok(s)
         })
@@ -98,13 +93,19 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
     }
     bar.finish_and_clear();
     println!(
-        "integrand {} (integral {:.12e}), R = {}",
+        "integrand {} (integral {:.12e}), R = {}; seconds: wall time of all R realizations at an N",
         f.name(),
         f.reference().value,
         args.realizations
     );
     for s in &studies {
         match &s.fit {
+            // Through two N the line fits exactly: no degree of freedom is left to measure the scatter
+            // (chi2/dof), and the interval holds only the two points' own errors, not a curvature.
+            Some(fit) if s.points.len() == 2 => println!(
+                "{}: slope {:.3} (95% CI {:.3} .. {:.3} from the two points' errors alone, chi2/dof —: give three or more N to test the fit)",
+                s.sampler, fit.slope, fit.ci95.0, fit.ci95.1
+            ),
             Some(fit) => println!(
                 "{}: slope {:.3} (95% CI {:.3} .. {:.3}, chi2/dof {:.2})",
                 s.sampler, fit.slope, fit.ci95.0, fit.ci95.1, fit.chi2_per_dof
@@ -112,12 +113,12 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             None => println!("{}:", s.sampler),
         }
         println!(
-            "{:>8} {:>12} {:>10} {:>10}",
-            "N", "MSE", "stderr", "seconds"
+            "{:>8} {:>12} {:>10} {:>12}",
+            "N", "MSE", "stderr", "seconds(R)"
         );
         for p in &s.points {
             println!(
-                "{:>8} {:>12.4e} {:>10.2e} {:>10.3}",
+                "{:>8} {:>12.4e} {:>10.2e} {:>12.3}",
                 p.n, p.mse, p.mse_stderr, p.seconds
             );
         }

@@ -38,7 +38,13 @@ pub struct GalleryArgs {
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
     /// Points per set; a sampler that cannot make this N uses its nearest valid N (the index says which).
-    #[arg(short = 'n', long = "n", default_value_t = 256)]
+    #[arg(
+        short = 'n',
+        long = "n",
+        default_value_t = 256,
+        value_parser = super::parse_count,
+        allow_negative_numbers = true
+    )]
     pub n: usize,
     /// Frequency grid side K (even).
     #[arg(long, default_value_t = 128)]

@@ -17,20 +17,36 @@ use crate::points::shear::ShearMode;
 use crate::samplers::{self, Sampler};
 use std::path::{Path, PathBuf};
 
-/// Builds the sampler `name` in `dims` dimensions, sheared by `shear = (sx, sy)` if given (4D only).
-pub fn sampler_with_shear(
-    name: &str,
-    dims: usize,
-    shear: Option<(f64, f64)>,
-    mode: ShearMode,
-) -> Result<Box<dyn Sampler>> {
+/// `--shear sx,sy` and `--shear-mode`: a constant shear of a 4D sampler's sets (sample, spectrum,
+/// converge; render's `--shear` is the per-pixel oracle's instead).
+#[derive(Clone, Debug, clap::Args)]
+pub struct ShearArgs {
+    /// Shear the 4D sets by sx in xu and sy in yv (written sx,sy; negative ones as
+    /// --shear=-0.5,-0.5), aligning their spectra with a defocused pixel's, e.g. the oracle's shear of
+    /// the integrand. Where a set is randomly shifted (converge), the shift moves the pattern before
+    /// it is sheared.
+    #[arg(long, value_parser = parse_shear, allow_hyphen_values = true)]
+    pub shear: Option<(f64, f64)>,
+    /// How --shear is applied: transported (seam-free, exactly uniform on the square; default) or wrap
+    /// (x − s u mod 1, which adds a seam on non-periodic integrands).
+    #[arg(long, value_parser = parse_shear_mode, default_value = "transported", requires = "shear")]
+    pub shear_mode: ShearMode,
+}
+
+/// Builds the sampler `name` in `dims` dimensions, sheared as `shear` asks (4D only).
+pub fn sampler_with_shear(name: &str, dims: usize, shear: &ShearArgs) -> Result<Box<dyn Sampler>> {
     let inner = samplers::build(name, dims)?;
-    match shear {
+    match shear.shear {
         None => Ok(inner),
         Some(_) if dims != 4 => Err(Error::Usage(
             "--shear applies to the xu and yv projections of 4D sets; ask for 4D sets (--dims 4 in sample and spectrum, a 4D integrand such as sheared:s=0.5@xu in converge)".into(),
         )),
-        Some((sx, sy)) => Ok(Box::new(samplers::Sheared::new(inner, sx, sy, mode)?)),
+        Some((sx, sy)) => Ok(Box::new(samplers::Sheared::new(
+            inner,
+            sx,
+            sy,
+            shear.shear_mode,
+        )?)),
     }
 }
 
@@ -44,6 +60,34 @@ pub fn parse_shear(text: &str) -> std::result::Result<(f64, f64), String> {
             "'{text}' is not a shear; write two finite numbers sx,sy (e.g. 0.5,0.5), the shear of xu and of yv"
         )),
     }
+}
+
+/// Parses a point count N (`-n`, `--spp`): a positive integer. Negative numbers reach this parser
+/// (the flags allow them) so that `-n -5` is answered here rather than as an unknown flag.
+pub fn parse_count(text: &str) -> std::result::Result<usize, String> {
+    match text.trim().parse::<i128>() {
+        Ok(v) if v >= 1 => usize::try_from(v)
+            .map_err(|_| format!("{text} is above the largest count, {}", usize::MAX)),
+        Ok(_) => Err(format!(
+            "N must be a positive integer (1 or more), not {text}"
+        )),
+        Err(_) => Err(format!(
+            "'{text}' is not a whole number; N must be a positive integer, e.g. 64"
+        )),
+    }
+}
+
+/// Checks that a list of N (`-n 16,64,256`) names each N once: a repeat would measure the same thing
+/// twice and print it as two rows.
+pub fn distinct_counts(ns: &[usize]) -> Result<()> {
+    for (i, n) in ns.iter().enumerate() {
+        if ns[..i].contains(n) {
+            return Err(Error::Usage(format!(
+                "-n lists {n} twice; give each N once (e.g. -n 16,64,256)"
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Parses `--shear-mode`.
@@ -76,6 +120,53 @@ pub fn image_kinds(outputs: &[PathBuf]) -> Result<Vec<ImageKind>> {
             ))),
         })
         .collect()
+}
+
+/// Checks that the file `path` given to `flag` is named `.ext`, the one format `flag` writes (`what`,
+/// e.g. "a CSV table").
+pub fn require_extension(path: &Path, flag: &str, ext: &str, what: &str) -> Result<()> {
+    if extension(path).as_deref() == Some(ext) {
+        return Ok(());
+    }
+    Err(Error::Usage(format!(
+        "{flag} {}: name it .{ext} ({flag} writes {what})",
+        path.display()
+    )))
+}
+
+/// The files a command writes beside one another from `-o output`, one per extension of `exts` (e.g.
+/// `out/oracle.exr` and `out/oracle.npy`). `output` may carry one of `exts` or no extension; a path
+/// with no file name, or with another extension (which would not be written), is a usage error
+/// naming the files and the fix.
+pub fn sibling_outputs(output: &Path, exts: &[&str]) -> Result<Vec<PathBuf>> {
+    if output.file_name().is_none() {
+        return Err(Error::Usage(format!(
+            "-o {} has no usable file name; give a path such as out/image.{}",
+            output.display(),
+            exts[0]
+        )));
+    }
+    let files: Vec<PathBuf> = exts.iter().map(|e| output.with_extension(e)).collect();
+    if let Some(ext) = extension(output).filter(|x| !exts.contains(&x.as_str())) {
+        let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+        let dotted: Vec<String> = exts.iter().map(|e| format!(".{e}")).collect();
+        return Err(Error::Usage(format!(
+            "-o {}: the outputs are {}, not a .{ext}; name -o with {}, or with no extension",
+            output.display(),
+            spoken_list(&names, "and"),
+            spoken_list(&dotted, "or")
+        )));
+    }
+    Ok(files)
+}
+
+/// `a, b and c` (with `word` = "and").
+fn spoken_list(items: &[String], word: &str) -> String {
+    match items {
+        [] => String::new(),
+        [one] => one.clone(),
+        [rest @ .., last] => format!("{} {word} {last}", rest.join(", ")),
+    }
 }
 
 /// The lower-case extension of a path.

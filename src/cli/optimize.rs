@@ -31,16 +31,17 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = 2)]
     pub dims: usize,
     /// Points per set.
-    #[arg(short = 'n', long)]
+    #[arg(short = 'n', long, value_parser = super::parse_count, allow_negative_numbers = true)]
     pub n: usize,
     /// Number of sets; they are optimized in parallel, set s from random stream s of the seed.
     #[arg(long, default_value_t = 1)]
     pub sets: usize,
-    /// Seed of the random starts.
-    #[arg(long, default_value_t = 0)]
+    /// Seed of the random starts (default 1, as in every other command).
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Output table, `.npy` ([sets, N, D] float64); the same numbers go to `.txt`, `.h`, a `.json`
-    /// sidecar and a `.log.csv` next to it.
+    /// sidecar and a `.log.csv` next to it. The C header's array is named after the file:
+    /// `-o out/fan.npy` gives `anisospec_fan` and the macros `ANISOSPEC_FAN_SETS`, `_N`, `_DIMS`.
     #[arg(short = 'o', long)]
     pub output: PathBuf,
     /// Largest number of solver iterations per set.
@@ -94,11 +95,16 @@ const MAX_SECONDS: f64 = 1e9;
 const MAX_WEIGHT: f64 = 1e6;
 
 fn check_args(args: &OptimizeArgs) -> Result<()> {
-    if args.output.extension().and_then(|e| e.to_str()) != Some("npy") {
-        return Err(Error::Usage(format!(
-            "-o {}: the table is written as numpy; name it .npy (the .txt, .h, .json and .log.csv go next to it)",
-            args.output.display()
-        )));
+    crate::cli::require_extension(
+        &args.output,
+        "-o",
+        "npy",
+        "the table as numpy, and the .txt, .h, .json and .log.csv next to it",
+    )?;
+    if args.sets == 0 {
+        return Err(Error::Usage(
+            "--sets 0 asks for nothing; give at least one set".into(),
+        ));
     }
     if args.n < 2 {
         return Err(Error::Usage(format!(
@@ -143,18 +149,13 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
     Ok(())
 }
 
-/// The sibling of `out` with another extension, e.g. `table.npy` → `table.json`.
-fn sibling(out: &Path, ext: &str) -> PathBuf {
-    out.with_extension(ext)
-}
-
 /// Runs `anisospec optimize`.
 pub fn run(args: &OptimizeArgs) -> Result<()> {
     check_args(args)?;
     let target = Target::load(&args.target)?;
     let outputs: Vec<PathBuf> = ["npy", "txt", "h", "json", "log.csv"]
         .iter()
-        .map(|e| sibling(&args.output, e))
+        .map(|e| args.output.with_extension(e))
         .collect();
     let mut inputs = vec![args.target.clone()];
     if let Target::Image(img) = &target {
@@ -330,8 +331,30 @@ fn optimize_with_bar(
     out
 }
 
-/// A C header with the same numbers as the npy table: `double NAME[sets][n][dims]`.
+/// The C name of the table `-o output`: `anisospec_` and the file stem, lower case, with every
+/// character that is not an ASCII letter or digit made `_` (`out/Fan-A.npy` → `anisospec_fan_a`), so
+/// that tables of different names can be included in one C file.
+fn c_name(output: &Path) -> String {
+    let stem = output.file_stem().unwrap_or_default().to_string_lossy();
+    let body: String = stem
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    format!("anisospec_{body}")
+}
+
+/// A C header with the same numbers as the npy table: `static const double NAME[sets][n][dims]` and
+/// the macros `NAME_SETS`, `NAME_N`, `NAME_DIMS` (upper case), inside the include guard `NAME_H`, with
+/// `NAME` from [`c_name`] of `-o`.
 fn write_header(path: &Path, points: &PointSets, args: &OptimizeArgs) -> Result<()> {
+    let name = c_name(&args.output);
+    let upper = name.to_ascii_uppercase();
     write_atomic(path, |w| {
         writeln!(
             w,
@@ -342,13 +365,13 @@ fn write_header(path: &Path, points: &PointSets, args: &OptimizeArgs) -> Result<
             args.sets,
             args.seed
         )?;
-        writeln!(w, "#ifndef ANISOSPEC_TABLE_H\n#define ANISOSPEC_TABLE_H")?;
-        writeln!(w, "#define ANISOSPEC_TABLE_SETS {}", points.sets())?;
-        writeln!(w, "#define ANISOSPEC_TABLE_N {}", points.n())?;
-        writeln!(w, "#define ANISOSPEC_TABLE_DIMS {}", points.dims())?;
+        writeln!(w, "#ifndef {upper}_H\n#define {upper}_H")?;
+        writeln!(w, "#define {upper}_SETS {}", points.sets())?;
+        writeln!(w, "#define {upper}_N {}", points.n())?;
+        writeln!(w, "#define {upper}_DIMS {}", points.dims())?;
         writeln!(
             w,
-            "static const double anisospec_table[{}][{}][{}] = {{",
+            "static const double {name}[{}][{}][{}] = {{",
             points.sets(),
             points.n(),
             points.dims()

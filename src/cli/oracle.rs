@@ -1,6 +1,6 @@
 //! `anisospec oracle`: the per-pixel depth, shear, shear range and class of the scene (DESIGN §5).
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::render::oracle::{oracle_array, oracle_image, PixelClass, ORACLE_CHANNELS};
 use crate::render::Scene;
 use std::path::PathBuf;
@@ -13,8 +13,8 @@ pub struct OracleArgs {
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Output path; FILE.exr (channels depth, sx, sy, s_min, s_max, class) and FILE.npy (float64
-    /// [height, width, 6], same channel order, row 0 at the top of the image) are written, whatever
-    /// the extension given. Depth is in world units along the view axis; shears are in pixels per lens
+    /// [height, width, 6], same channel order, row 0 at the top of the image) are written: name it
+    /// FILE.exr, FILE.npy or FILE. Depth is in world units along the view axis; shears are in pixels per lens
     /// width (the integrand varies along x + s*u); class is 0 in focus, 1 hairline, 2 double wedge.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
@@ -22,20 +22,14 @@ pub struct OracleArgs {
 
 /// Runs `anisospec oracle`.
 pub fn run(args: &OracleArgs) -> Result<()> {
+    let files = crate::cli::sibling_outputs(&args.output, &["exr", "npy"])?;
+    let (exr, npy) = (&files[0], &files[1]);
+    let inputs: Vec<std::path::PathBuf> = args.scene.iter().cloned().collect();
+    crate::output::check_outputs(&[exr, npy], &inputs)?;
     let scene = Scene::load(args.scene.as_deref())?;
     let oracle = oracle_image(&scene)?;
     let (w, h) = (scene.width(), scene.height());
     let data = oracle_array(&oracle);
-    let npy = args.output.with_extension("npy");
-    let exr = args.output.with_extension("exr");
-    if npy == exr {
-        return Err(Error::Usage(format!(
-            "-o {} has no usable file name; give a path such as out/oracle.exr",
-            args.output.display()
-        )));
-    }
-    let inputs: Vec<std::path::PathBuf> = args.scene.iter().cloned().collect();
-    crate::output::check_outputs(&[&npy, &exr], &inputs)?;
     let channels: Vec<(&str, Vec<f32>)> = ORACLE_CHANNELS
         .iter()
         .enumerate()
@@ -49,9 +43,9 @@ pub fn run(args: &OracleArgs) -> Result<()> {
             (*name, plane)
         })
         .collect();
-    crate::output::write_group(&[&npy, &exr], |staged| {
-        crate::output::write_npy(&staged(&npy), &[h, w, ORACLE_CHANNELS.len()], &data)?;
-        crate::output::image::write_exr(&staged(&exr), w, h, &channels)
+    crate::output::write_group(&[npy, exr], |staged| {
+        crate::output::write_npy(&staged(npy), &[h, w, ORACLE_CHANNELS.len()], &data)?;
+        crate::output::image::write_exr(&staged(exr), w, h, &channels)
     })?;
     let count = |c: PixelClass| oracle.iter().filter(|o| o.class == c).count();
     println!(

@@ -30,7 +30,7 @@ pub struct PixelSpectrumArgs {
     pub average: usize,
     /// Output path; FILE.npy (float64 [K, K], P[i, j] at k1 = j - K/2, k2 = i - K/2), FILE.exr (raw
     /// values, largest k2 on top) and FILE.png (log10 of P over its largest non-DC value, from -6 to 0)
-    /// are written, whatever the extension given.
+    /// are written: name it FILE.npy, FILE.exr, FILE.png or FILE.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
 }
@@ -52,21 +52,15 @@ fn parse_pixel(text: &str) -> Result<(usize, usize)> {
 /// Runs `anisospec pixel-spectrum`.
 pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
     let (px, py) = parse_pixel(&args.pixel)?;
-    let outputs = ["npy", "exr", "png"].map(|e| args.output.with_extension(e));
-    if outputs[0] == outputs[1] {
-        return Err(Error::Usage(format!(
-            "-o {} has no usable file name; give a path such as out/pixel.png",
-            args.output.display()
-        )));
-    }
+    let outputs = super::sibling_outputs(&args.output, &["npy", "exr", "png"])?;
     let inputs: Vec<std::path::PathBuf> = args.scene.iter().cloned().collect();
-    crate::output::check_outputs(&outputs.each_ref().map(|p| p.as_path()), &inputs)?;
+    let [npy, exr, png] = [&outputs[0], &outputs[1], &outputs[2]];
+    crate::output::check_outputs(&[npy, exr, png], &inputs)?;
     let proj = Projection::parse(&args.proj, 4)?;
     let scene = Arc::new(Scene::load(args.scene.as_deref())?);
     let f = PixelIntegrand::new(scene, px, py)?;
     let p = slice_spectrum(|x| f.value(x), proj, args.res, args.average)?;
     let k = args.res;
-    let [npy, exr, png] = &outputs;
     let (side, pixels) = spectrum_png_pixels(&p, k);
     crate::output::write_group(&[npy, exr, png], |staged| {
         crate::output::write_npy(&staged(npy), &[k, k], &p)?;

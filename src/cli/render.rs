@@ -1,7 +1,7 @@
 //! `anisospec render`: the depth-of-field image with any 4D sampler, optionally sheared per pixel by
 //! the depth oracle, its MSE against a high-count reference, and the reference itself.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::points::shear::ShearMode;
 use crate::render::image::{
     mse, oracle_shears, reference_image, render_image, write_image_pair, WedgeShear,
@@ -22,28 +22,30 @@ pub struct RenderArgs {
     pub scene: Option<PathBuf>,
     /// 4D sampler (see `anisospec samplers`), e.g. random, oa, sobol, padded-mj, xuyv-mj, or
     /// table:PATH (optimized sets), or lattice:Z1:Z2:Z3:Z4 (a rank-1 lattice with that generating
-    /// vector). Not needed with --reference.
+    /// vector). Not used with --reference.
     #[arg(long, required_unless_present = "reference")]
     pub sampler: Option<String>,
     /// Samples (rays) per pixel; must be a count the sampler allows.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = crate::cli::parse_count, allow_negative_numbers = true)]
     pub spp: usize,
     /// Seed: pixel i uses stream i of it for its set and its toroidal shift.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// `oracle`: shear each pixel's points by the depth oracle's shear in xu and yv.
-    #[arg(long, value_parser = ["oracle"])]
-    pub shear: Option<String>,
-    /// How the shear is applied: transported (seam-free inverse-CDF transport, default) or wrap
-    /// (x' = x - s u mod 1).
-    #[arg(long, default_value = "transported", value_parser = crate::cli::parse_shear_mode)]
-    pub shear_mode: ShearMode,
-    /// Shear of double-wedge (occluder) pixels: centre (default: the shear of the depth at the pixel
-    /// and lens centres, measured better on the whole image) or none.
-    #[arg(long, value_enum, default_value_t = WedgeShear::Centre)]
-    pub wedge_shear: WedgeShear,
-    /// Write the high-count reference image (channels Y and stderr) instead of a sampled one.
+    /// Shear each pixel's points by the depth oracle's shear in xu and yv (the scene needs an
+    /// aperture).
     #[arg(long)]
+    pub shear: bool,
+    /// How --shear is applied: transported (seam-free inverse-CDF transport, default) or wrap
+    /// (x' = x - s u mod 1).
+    #[arg(long, default_value = "transported", value_parser = crate::cli::parse_shear_mode, requires = "shear")]
+    pub shear_mode: ShearMode,
+    /// With --shear, the shear of double-wedge (occluder) pixels: centre (default: the shear of the
+    /// depth at the pixel and lens centres, measured better on the whole image) or none.
+    #[arg(long, value_enum, default_value_t = WedgeShear::Centre, requires = "shear")]
+    pub wedge_shear: WedgeShear,
+    /// Write the high-count reference image (channels Y and stderr) instead of a sampled one; the
+    /// sampler's flags (--sampler, --spp, --seed, --shear) do not apply.
+    #[arg(long, conflicts_with_all = ["sampler", "spp", "seed", "shear"])]
     pub reference: bool,
     /// Rays per pixel of the reference (a power of two, 1024 to 16777216), in independent
     /// Owen-scrambled Sobol sets whose spread gives its standard error. Every render computes the
@@ -55,7 +57,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub cache: Option<PathBuf>,
     /// Output image; IMG.exr (float radiance, channel Y) and IMG.png (preview, gamma 2.2, white at
-    /// 0.5) are written, whatever the extension given.
+    /// 0.5) are written: name it IMG.exr, IMG.png or IMG.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
 }
@@ -65,21 +67,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = Scene::load(args.scene.as_deref())?;
     let (w, h) = (scene.width(), scene.height());
     let cache = args.cache.clone().unwrap_or_else(default_cache_dir);
-    if args.output.with_extension("exr") == args.output.with_extension("png") {
-        return Err(Error::Usage(format!(
-            "-o {} has no usable file name; give a path such as out/render.exr",
-            args.output.display()
-        )));
-    }
     let mut inputs: Vec<PathBuf> = args.scene.iter().cloned().collect();
     inputs.extend(samplers::input_files(
         args.sampler.as_deref().unwrap_or_default(),
     ));
-    let (exr, png) = (
-        args.output.with_extension("exr"),
-        args.output.with_extension("png"),
-    );
-    crate::output::check_outputs(&[&exr, &png], &inputs)?;
+    let files = crate::cli::sibling_outputs(&args.output, &["exr", "png"])?;
+    crate::output::check_outputs(&[&files[0], &files[1]], &inputs)?;
     let reference_of = |what: &str| {
         let bar = crate::progress::bar(h as u64, what);
         reference_image(&scene, args.ref_count, Some(&cache), &bar)
@@ -108,12 +101,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let name = args.sampler.as_deref().unwrap_or_default();
     let sampler = samplers::build(name, 4)?;
     samplers::validate_n(sampler.as_ref(), args.spp)?;
-    let shears = match args.shear {
-        Some(_) => {
-            require_aperture(&scene, "--shear oracle")?;
-            Some(oracle_shears(&oracle_image(&scene)?, args.wedge_shear))
-        }
-        None => None,
+    let shears = if args.shear {
+        require_aperture(&scene, "--shear")?;
+        Some(oracle_shears(&oracle_image(&scene)?, args.wedge_shear))
+    } else {
+        None
     };
     let reference = reference_of("reference image")?;
     let start = Instant::now();
@@ -128,9 +120,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     )?;
     let seconds = start.elapsed().as_secs_f64();
     let (exr, png) = write_image_pair(&args.output, w, h, &[("Y", &image)])?;
-    let shear = match args.shear {
-        Some(_) => format!("sheared by the oracle ({:?})", args.shear_mode).to_lowercase(),
-        None => "unsheared".into(),
+    let shear = if args.shear {
+        format!("sheared by the oracle ({:?})", args.shear_mode).to_lowercase()
+    } else {
+        "unsheared".into()
     };
     println!(
         "{name} {shear}, {} spp: MSE {:.4e} against the reference ({} rays per pixel, its own noise \

@@ -1,10 +1,9 @@
 //! `anisospec sample`: draw point sets and write them as npy or text.
 
-use super::{parse_shear, parse_shear_mode, sampler_with_shear};
+use super::{sampler_with_shear, ShearArgs};
 use crate::error::Result;
 use crate::output::check_outputs;
 use crate::points::io::{write_points, Format};
-use crate::points::shear::ShearMode;
 use crate::samplers::{self, generate_sets};
 use std::path::PathBuf;
 
@@ -20,7 +19,7 @@ pub struct SampleArgs {
     pub dims: usize,
     /// Points per set, N. Samplers with a construction constraint (e.g. jittered needs a square) name
     /// the nearest valid N if this one is not.
-    #[arg(short = 'n', long = "n")]
+    #[arg(short = 'n', long = "n", value_parser = super::parse_count, allow_negative_numbers = true)]
     pub n: usize,
     /// Number of independent sets to draw.
     #[arg(long, default_value_t = 1)]
@@ -29,14 +28,8 @@ pub struct SampleArgs {
     /// number of threads.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Shear the 4D sets by sx in xu and sy in yv (written sx,sy), aligning their spectra with a
-    /// defocused pixel's.
-    #[arg(long, value_parser = parse_shear, allow_hyphen_values = true)]
-    pub shear: Option<(f64, f64)>,
-    /// How --shear is applied: transported (seam-free, exactly uniform on the square; default) or wrap
-    /// (x − s u mod 1, which adds a seam on non-periodic integrands).
-    #[arg(long, value_parser = parse_shear_mode, default_value = "transported")]
-    pub shear_mode: ShearMode,
+    #[command(flatten)]
+    pub shear: ShearArgs,
     /// Output file: .npy (float64 [sets, N, D]) or .txt (one point per line, '#' between sets).
     #[arg(short = 'o', long)]
     pub output: PathBuf,
@@ -46,7 +39,7 @@ pub struct SampleArgs {
 pub fn run(args: &SampleArgs) -> Result<()> {
     Format::of(&args.output)?;
     check_outputs(&[&args.output], &samplers::input_files(&args.sampler))?;
-    let sampler = sampler_with_shear(&args.sampler, args.dims, args.shear, args.shear_mode)?;
+    let sampler = sampler_with_shear(&args.sampler, args.dims, &args.shear)?;
     let sets = generate_sets(sampler.as_ref(), args.n, args.sets, args.seed)?;
     write_points(&args.output, &sets)?;
     eprintln!(

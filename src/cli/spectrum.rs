@@ -1,11 +1,10 @@
 //! `anisospec spectrum`: the expected power spectrum of a sampler or of a point file, in any projection.
 
-use super::{image_kinds, parse_shear, parse_shear_mode, sampler_with_shear, ImageKind};
+use super::{image_kinds, require_extension, sampler_with_shear, ImageKind, ShearArgs};
 use crate::error::{Error, Result};
 use crate::output::image::{write_spectrum_exr, write_spectrum_png};
 use crate::output::{check_outputs, write_npy};
 use crate::points::io::read_points;
-use crate::points::shear::ShearMode;
 use crate::points::Projection;
 use crate::samplers;
 use crate::spectrum::expected::{of_sampler, of_sets, ExpectedSpectrum};
@@ -21,14 +20,21 @@ pub struct SpectrumArgs {
     /// sets), or lattice:Z1:Z2[:Z3:Z4] (a rank-1 lattice with that generating vector).
     #[arg(long)]
     pub sampler: Option<String>,
-    /// Point file (.npy [sets, N, D] or .txt): each set is one realization.
-    #[arg(long)]
+    /// Point file (.npy [sets, N, D] or .txt): each set is one realization. Its N and D are read from
+    /// the file, so -n, --dims, --seed, --shear and --shear-mode do not apply.
+    #[arg(long, conflicts_with_all = ["n", "dims", "seed", "shear", "shear_mode"])]
     pub input: Option<PathBuf>,
-    /// Dimensions of the sampler's points (2 or 4); ignored with --input, whose D is read from the file.
+    /// Dimensions of the sampler's points (2 or 4).
     #[arg(long, default_value_t = 2)]
     pub dims: usize,
     /// Points per set (with --sampler).
-    #[arg(short = 'n', long = "n", required_unless_present = "input")]
+    #[arg(
+        short = 'n',
+        long = "n",
+        required_unless_present = "input",
+        value_parser = super::parse_count,
+        allow_negative_numbers = true
+    )]
     pub n: Option<usize>,
     /// Projection: two of x,y,u,v (xy, uv, xu, yv, ...) or two dimension indices (0,2).
     /// The first is the horizontal frequency k1, the second the vertical k2.
@@ -38,7 +44,7 @@ pub struct SpectrumArgs {
     #[arg(long, default_value_t = 128)]
     pub res: usize,
     /// Realizations averaged (independent sets). With --sampler, default 32; with --input, at most the
-    /// number of sets in the file (default: all of them).
+    /// number of sets in the file (default: all of them). --stderr needs at least 2.
     #[arg(long)]
     pub realizations: Option<usize>,
     /// Use the exact O(N K²) DFT instead of the NUFFT.
@@ -50,18 +56,15 @@ pub struct SpectrumArgs {
     /// Random seed of the realizations (with --sampler).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Shear the sampler's 4D sets by sx in xu and sy in yv (written sx,sy).
-    #[arg(long, value_parser = parse_shear, allow_hyphen_values = true)]
-    pub shear: Option<(f64, f64)>,
-    /// How --shear is applied: transported (seam-free, default) or wrap.
-    #[arg(long, value_parser = parse_shear_mode, default_value = "transported")]
-    pub shear_mode: ShearMode,
+    #[command(flatten)]
+    pub shear: ShearArgs,
     /// Output files, one or more (repeat -o or separate with commas): .npy (float64 [K, K], row i at
     /// k2 = i − K/2, column j at k1 = j − K/2), .exr (raw values) or .png (log10 P over [−2, 1]).
     /// Images put larger k2 on top.
     #[arg(short = 'o', long, value_delimiter = ',', required = true)]
     pub output: Vec<PathBuf>,
-    /// Also write the per-bin standard error of the mean spectrum as .npy.
+    /// Also write the per-bin standard error of the mean spectrum as .npy (needs 2 or more
+    /// realizations).
     #[arg(long)]
     pub stderr: Option<PathBuf>,
     /// Write the radial profile as CSV: r, r/sqrt(N), mean, stderr, anisotropy (dB) and, with --cones,
@@ -88,13 +91,23 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
         (&args.stderr, "--stderr", "npy", "an npy array"),
     ] {
         if let Some(path) = extra {
-            if path.extension().and_then(|e| e.to_str()) != Some(ext) {
-                return Err(Error::Usage(format!(
-                    "{flag} {}: name it .{ext} ({flag} writes {what})",
-                    path.display()
-                )));
-            }
+            require_extension(path, flag, ext, what)?;
         }
+    }
+    match args.realizations {
+        Some(0) => {
+            return Err(Error::Usage(
+                "--realizations 0 averages nothing; give at least 1 (2 or more with --stderr)"
+                    .into(),
+            ))
+        }
+        Some(1) if args.stderr.is_some() => {
+            return Err(no_stderr(
+                "--realizations 1 asks for one",
+                "give --realizations 2 or more",
+            ))
+        }
+        _ => {}
     }
     let inputs = match (&args.sampler, &args.input) {
         (Some(name), _) => samplers::input_files(name),
@@ -111,18 +124,13 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
     check_outputs(&outputs, &inputs)?;
     let spec = match (&args.sampler, &args.input) {
         (Some(name), _) => {
-            let sampler = sampler_with_shear(name, args.dims, args.shear, args.shear_mode)?;
+            let sampler = sampler_with_shear(name, args.dims, &args.shear)?;
             let proj = Projection::parse(&args.proj, sampler.dims())?;
             let n = args.n.expect("clap requires -n with --sampler");
             let r = args.realizations.unwrap_or(32);
             of_sampler(sampler.as_ref(), n, proj, args.res, r, args.seed, method)?
         }
         (None, Some(path)) => {
-            if args.shear.is_some() {
-                return Err(Error::Usage(
-                    "--shear applies to --sampler; shear the file's sets with `anisospec sample` instead".into(),
-                ));
-            }
             let sets = read_points(path)?;
             let proj = Projection::parse(&args.proj, sets.dims())?;
             let sets = match args.realizations {
@@ -140,6 +148,12 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
                     sets.dims(),
                     sets.data()[..r * sets.n() * sets.dims()].to_vec(),
                 )?,
+                None if sets.sets() < 2 && args.stderr.is_some() => {
+                    return Err(no_stderr(
+                        &format!("{} holds one set", path.display()),
+                        "give a file of 2 or more sets",
+                    ))
+                }
                 None => sets,
             };
             of_sets(&sets, proj, args.res, method)?
@@ -170,6 +184,13 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
             .join(", ")
     );
     Ok(())
+}
+
+/// The refusal of `--stderr` over a single realization, whose standard error is 0 in every bin.
+fn no_stderr(why: &str, fix: &str) -> Error {
+    Error::Usage(format!(
+        "--stderr needs 2 or more realizations ({why}, and one realization's spread is 0 in every bin); {fix}, or leave out --stderr"
+    ))
 }
 
 /// Writes the mean spectrum to every output in its format.

@@ -1,7 +1,7 @@
 //! `anisospec variance`: the Fourier-domain variance prediction of a sampler on an integrand, with the
 //! directional-cone breakdown and the predicted slope.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::integrands::parse;
 use crate::samplers;
 use crate::spectrum::Method;
@@ -18,7 +18,14 @@ pub struct VarianceArgs {
     #[arg(long)]
     pub integrand: String,
     /// Sample counts N, comma-separated, e.g. 16,64,256,1024.
-    #[arg(short = 'n', long = "n", value_delimiter = ',', required = true)]
+    #[arg(
+        short = 'n',
+        long = "n",
+        value_delimiter = ',',
+        required = true,
+        value_parser = crate::cli::parse_count,
+        allow_negative_numbers = true
+    )]
     pub n: Vec<usize>,
     /// Frequency grid side K (even) in each projection; the rest of the sum is estimated as white noise
     /// (Parseval) and reported as the tail.
@@ -50,15 +57,9 @@ pub struct VarianceArgs {
 
 /// Runs the prediction and prints it.
 pub fn run(args: &VarianceArgs) -> Result<()> {
+    crate::cli::distinct_counts(&args.n)?;
     if let Some(out) = &args.output {
-        if out.extension().and_then(|e| e.to_str()) != Some("csv") {
-            return Err(Error::Usage(format!(
-                "-o {}: the prediction is written as CSV; name it *.csv",
-                out.display()
-            )));
-        }
-    }
-    if let Some(out) = &args.output {
+        crate::cli::require_extension(out, "-o", "csv", "the prediction as a CSV table")?;
         crate::output::check_outputs(&[out], &samplers::input_files(&args.sampler))?;
     }
     let f = parse(&args.integrand)?;

@@ -37,7 +37,7 @@ where
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
     let mut tmp = builder
         .tempfile_in(dir)
-        .map_err(|e| Error::io("create a temporary file in", dir, e))?;
+        .map_err(|e| Error::io("create a file in", dir, os_error(&e)))?;
     {
         let mut w = BufWriter::new(tmp.as_file_mut());
         fill(&mut w)
@@ -126,7 +126,7 @@ fn staging_folder(dir: &Path) -> Result<tempfile::TempDir> {
     tempfile::Builder::new()
         .prefix(".anisospec-")
         .tempdir_in(dir)
-        .map_err(|e| Error::io("create a temporary folder in", dir, e))
+        .map_err(|e| Error::io("create a folder in", dir, os_error(&e)))
 }
 
 fn folder_in_the_way(out: &Path) -> Error {
@@ -193,7 +193,7 @@ fn move_file(from: &Path, to: &Path) -> Result<()> {
             let copy = tempfile::Builder::new()
                 .prefix(".anisospec-")
                 .tempfile_in(dir)
-                .map_err(|e| Error::io("create a temporary file in", dir, e))?;
+                .map_err(|e| Error::io("create a file in", dir, os_error(&e)))?;
             std::fs::copy(from, copy.path()).map_err(|e| Error::io("write", to, e))?;
             copy.persist(to)
                 .map_err(|e| Error::io("write", to, e.error))?;
@@ -231,11 +231,14 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> 
     })
 }
 
-/// Checks, before any work, that a command's outputs can be written without harm: no output is one of
-/// the `inputs` (point files, tables, targets, scenes: outputs never clobber inputs), no two outputs
-/// are the same file, no output is a folder, and each output's folder exists or can be created (no
-/// file stands where a folder must go). A usage error names the clash and the fix.
+/// Checks, before any work, that a command's output files can be written without harm: no output is
+/// one of the `inputs` (point files, tables, targets, scenes: outputs never clobber inputs), no two
+/// outputs are the same file, no output is a folder, and each output's folder exists (no file stands
+/// where it must go, and a missing one is not made: a typo in a path should not grow folders) and
+/// takes a new file (probed with a temporary file, removed at once). A usage error names the clash, or
+/// the folder and the operating system's reason, and the fix.
 pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<()> {
+    let mut probed: Vec<&Path> = Vec::new();
     for (i, out) in outputs.iter().enumerate() {
         if let Some(input) = inputs.iter().find(|input| same_file(out, input)) {
             return Err(Error::Usage(format!(
@@ -264,8 +267,48 @@ pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<()> {
                 blocker.display()
             )));
         }
+        let dir = folder_of(out);
+        if !dir.is_dir() {
+            return Err(Error::Usage(format!(
+                "cannot write {}: folder {} does not exist; create it first or choose another output path",
+                out.display(),
+                dir.display()
+            )));
+        }
+        if !probed.contains(&dir) {
+            probe_folder(dir)?;
+            probed.push(dir);
+        }
     }
     Ok(())
+}
+
+/// Creates and at once removes a temporary file in `dir`, so that a folder that takes no new file
+/// (read-only, forbidden, a virtual file system) is refused before any work, naming the folder.
+fn probe_folder(dir: &Path) -> Result<()> {
+    tempfile::Builder::new()
+        .prefix(".anisospec-")
+        .tempfile_in(dir)
+        .map(drop)
+        .map_err(|e| {
+            Error::Usage(format!(
+                "cannot write to {}: {}; choose a writable folder",
+                dir.display(),
+                os_error(&e)
+            ))
+        })
+}
+
+/// The operating system's own error, without the temporary path the `tempfile` crate adds to its
+/// message (`... at path "dir/.anisospec-XXXX"`): a message names the output or its folder, never a
+/// file the user did not ask for.
+fn os_error(e: &std::io::Error) -> std::io::Error {
+    if let Some(code) = e.raw_os_error() {
+        return std::io::Error::from_raw_os_error(code);
+    }
+    let text = e.to_string();
+    let text = text.split(" at path ").next().unwrap_or_default();
+    std::io::Error::new(e.kind(), text.to_string())
 }
 
 /// The existing file, if any, that stands where the folder `dir` (or one of its ancestors) must go: the

@@ -100,9 +100,9 @@ fn plot_error(path: &Path, e: impl std::fmt::Display) -> Error {
 }
 
 /// The axis range `[lo, hi]` padded by a fraction of a decade on each side, and widened to the
-/// enclosing decades when it holds no power of ten: plotters puts a log axis's ticks and labels at the
-/// powers of ten in range (and between them), so a range inside one decade (N = 16 to 64) would get an
-/// axis with no label at all.
+/// enclosing decades when it holds no power of ten: plotters puts the vertical axis's labels at the
+/// powers of ten in range (and between them), and [`log_ticks`] falls back on them, so a range inside
+/// one decade (N = 16 to 64) would otherwise get an axis with no label at all.
 fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     let (lo, hi) = values
         .filter(|v| v.is_finite() && *v > 0.0)
@@ -126,6 +126,140 @@ fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
             10f64.powf(lo.log10().floor()),
             10f64.powf(hi.log10().ceil()),
         ))
+    }
+}
+
+/// `v` with at most 4 significant digits, trailing zeros dropped: plain from 0.001 to 99999
+/// (`0.6830127018922193` → `0.683`, `1234.5` → `1235`), else in scientific notation (`1.235e-5`).
+pub fn short_number(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let trim = |t: String| -> String {
+        if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            t
+        }
+    };
+    // Round first, so that 99999.5 becomes 1e5 before the notation is chosen.
+    let rounded: f64 = format!("{v:.3e}").parse().unwrap_or(v);
+    let magnitude = rounded.abs().log10().floor();
+    if (-3.0..5.0).contains(&magnitude) {
+        let decimals = (3.0 - magnitude).max(0.0) as usize;
+        trim(format!("{rounded:.decimals$}"))
+    } else {
+        let text = format!("{rounded:.3e}");
+        let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+        format!("{}e{exponent}", trim(mantissa.to_string()))
+    }
+}
+
+/// `text` with every decimal number of more than 4 significant digits (one with a point, as a float
+/// prints: `c=0.6830127018922193`) written by [`short_number`]; integers and short numbers are kept as
+/// they are. For titles built from names that hold computed parameters.
+pub fn short_numbers(text: &str) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    while i < chars.len() {
+        let starts_number = chars[i].is_ascii_digit()
+            && (i == 0 || !(chars[i - 1].is_alphanumeric() || chars[i - 1] == '.'));
+        if !starts_number {
+            out.push(chars[i]);
+            i += 1;
+            continue;
+        }
+        let start = i;
+        let digits = |mut j: usize| {
+            while j < chars.len() && chars[j].is_ascii_digit() {
+                j += 1;
+            }
+            j
+        };
+        i = digits(i);
+        let mut has_point = false;
+        if i + 1 < chars.len() && chars[i] == '.' && chars[i + 1].is_ascii_digit() {
+            has_point = true;
+            i = digits(i + 1);
+            let sign = usize::from(i + 1 < chars.len() && matches!(chars[i + 1], '+' | '-'));
+            if i + 1 + sign < chars.len()
+                && matches!(chars[i], 'e' | 'E')
+                && chars[i + 1 + sign].is_ascii_digit()
+            {
+                i = digits(i + 1 + sign);
+            }
+        }
+        let token: String = chars[start..i].iter().collect();
+        let significant = token
+            .split(['e', 'E'])
+            .next()
+            .unwrap_or_default()
+            .chars()
+            .filter(char::is_ascii_digit)
+            .skip_while(|&c| c == '0')
+            .count();
+        match token.parse::<f64>() {
+            Ok(v) if has_point && significant > 4 => out.push_str(&short_number(v)),
+            _ => out.push_str(&token),
+        }
+    }
+    out
+}
+
+/// Where a log axis from `lo` to `hi` (`0 < lo < hi`) `pixels` long puts its labels: the first of
+/// powers of two (for ranges of counts, `lo ≥ 1`), 1-2-5 in each decade, every decade, and every k-th
+/// decade whose labels, as [`tick_label`] writes them in 14 px text, do not run into one another.
+/// Every axis that [`log_range`] makes holds at least one of them.
+fn log_ticks(lo: f64, hi: f64, pixels: f64) -> Vec<f64> {
+    let (llo, lhi) = (lo.log10(), hi.log10());
+    let at = |v: f64| (v.log10() - llo) / (lhi - llo) * pixels;
+    // About 8 px per character at 14 px, and a gap of 16 px between labels.
+    let width = |v: f64| 8.0 * tick_label(v).chars().count() as f64;
+    let fits = |ticks: &[f64]| {
+        ticks
+            .windows(2)
+            .all(|w| at(w[1]) - at(w[0]) >= (width(w[0]) + width(w[1])) / 2.0 + 16.0)
+    };
+    let inside = |v: &f64| lo <= *v && *v <= hi;
+    let decades = (llo.floor() as i32)..=(lhi.ceil() as i32);
+    let mut candidates: Vec<Vec<f64>> = Vec::new();
+    if lo >= 1.0 {
+        let twos = (lo.log2().ceil() as i32)..=(hi.log2().floor() as i32);
+        candidates.push(twos.map(|k| 2f64.powi(k)).collect());
+    }
+    candidates.push(
+        decades
+            .clone()
+            .flat_map(|d| [1.0, 2.0, 5.0].map(|m| m * 10f64.powi(d)))
+            .filter(inside)
+            .collect(),
+    );
+    for step in 1..=(lhi - llo).ceil().max(1.0) as i32 {
+        candidates.push(
+            decades
+                .clone()
+                .filter(|d| d.rem_euclid(step) == 0)
+                .map(|d| 10f64.powi(d))
+                .filter(inside)
+                .collect(),
+        );
+    }
+    candidates
+        .iter()
+        .find(|t| t.len() >= 2 && fits(t))
+        .or_else(|| candidates.iter().rev().find(|t| !t.is_empty()))
+        .cloned()
+        .unwrap_or_default()
+}
+
+/// The label of a tick at `v`: a whole number as it is (up to 9999999), anything else by
+/// [`short_number`].
+fn tick_label(v: f64) -> String {
+    if (1.0..1e7).contains(&v) && v.fract() == 0.0 {
+        format!("{v:.0}")
+    } else {
+        short_number(v)
     }
 }
 
@@ -184,35 +318,47 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
         root.fill(&WHITE).map_err(|e| plot_error(path, e))?;
         let mut builder = ChartBuilder::on(&root);
         builder
-            .caption(&plot.title, ("sans-serif", 22))
+            .caption(short_numbers(&plot.title), ("sans-serif", 22))
             .margin(12)
             .x_label_area_size(45)
             .y_label_area_size(80);
         let y_axis = (y0..y1).log_scale();
         if x_log {
+            // The plot's own width less the margins and the vertical axis's label area.
+            let ticks = log_ticks(x0, x1, plot.width as f64 - 2.0 * 12.0 - 80.0);
+            let minor: Vec<f64> = ((x0.log10().floor() as i32)..=(x1.log10().ceil() as i32))
+                .flat_map(|d| (1..10).map(move |m| m as f64 * 10f64.powi(d)))
+                .filter(|v| x0 <= *v && *v <= x1)
+                .collect();
+            let x_axis = (x0..x1)
+                .log_scale()
+                .with_key_points(ticks)
+                .with_light_points(minor);
             let chart = builder
-                .build_cartesian_2d((x0..x1).log_scale(), y_axis)
+                .build_cartesian_2d(x_axis, y_axis)
                 .map_err(|e| plot_error(path, e))?;
-            draw(chart, plot, path, y0, keep)?;
+            draw(chart, plot, path, y0, keep, &|v| tick_label(*v))?;
         } else {
             let chart = builder
                 .build_cartesian_2d(x0..x1, y_axis)
                 .map_err(|e| plot_error(path, e))?;
-            draw(chart, plot, path, y0, keep)?;
+            draw(chart, plot, path, y0, keep, &|v| format!("{v}"))?;
         }
         root.present().map_err(|e| plot_error(path, e))?;
     }
     super::image::write_png(path, w, h, 3, &buffer)
 }
 
-/// Draws the mesh, the series and the legend of `plot` on `chart`, whatever its horizontal scale;
-/// `y0` is the bottom of the vertical axis (where an error bar that would cross 0 ends).
+/// Draws the mesh, the series and the legend of `plot` on `chart`, whatever its horizontal scale, with
+/// `x_label` writing the horizontal axis's labels; `y0` is the bottom of the vertical axis (where an
+/// error bar that would cross 0 ends).
 fn draw<'a, X>(
     mut chart: ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, LogCoord<f64>>>,
     plot: &LogLogPlot,
     path: &Path,
     y0: f64,
     keep: impl Fn(&(f64, f64)) -> bool,
+    x_label: &dyn Fn(&f64) -> String,
 ) -> Result<()>
 where
     X: Ranged<ValueType = f64> + ValueFormatter<f64>,
@@ -223,7 +369,7 @@ where
         .y_desc(&plot.y_label)
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))
-        .x_label_formatter(&|v| format!("{v}"))
+        .x_label_formatter(x_label)
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .draw()
         .map_err(|e| plot_error(path, e))?;
@@ -373,6 +519,81 @@ mod tests {
         assert!(write_loglog_png(&path, &plot).is_err());
         assert_eq!(linear_range([-25.0, 25.0].into_iter()), Some((-27.0, 27.0)));
         assert_eq!(linear_range([3.0].into_iter()), Some((2.0, 4.0)));
+    }
+
+    /// Numbers in titles keep at most 4 significant digits; integers, short decimals and numbers inside
+    /// words are left alone.
+    #[test]
+    fn titles_shorten_long_numbers_only() {
+        for (v, want) in [
+            (0.6830127018922193, "0.683"),
+            (0.8415063509461096, "0.8415"),
+            (1234.5678, "1235"),
+            (99999.7, "1e5"),
+            (1.234567e-5, "1.235e-5"),
+            (-0.7111111, "-0.7111"),
+            (2.5e7, "2.5e7"),
+        ] {
+            assert_eq!(short_number(v), want, "{v}");
+        }
+        for (title, want) in [
+            (
+                "Convergence on step:theta=30,c=0.6830127018922193",
+                "Convergence on step:theta=30,c=0.683",
+            ),
+            (
+                "sheared:s=-0.711,c=0.5@xu, N = 1024",
+                "sheared:s=-0.711,c=0.5@xu, N = 1024",
+            ),
+            ("MSE 1.23456789e-5 at 65536", "MSE 1.235e-5 at 65536"),
+            ("table v2.12345 and 3.14159265", "table v2.12345 and 3.142"),
+        ] {
+            assert_eq!(short_numbers(title), want);
+        }
+    }
+
+    /// Log-axis labels: powers of two on a count axis that has room for them (the convergence plot's
+    /// 16 to 1024, labelled from its first point), 1-2-5 on a time axis, decades where those would
+    /// crowd; every label inside the axis, and no two closer than their half-widths and a gap.
+    #[test]
+    fn log_axis_labels_do_not_run_together() {
+        let width = 1000.0 - 24.0 - 80.0;
+        let (lo, hi) = log_range([16.0, 1024.0].into_iter()).unwrap();
+        let ticks = log_ticks(lo, hi, width);
+        assert_eq!(ticks, [16.0, 32.0, 64.0, 128.0, 256.0, 512.0, 1024.0]);
+        let labels: Vec<String> = ticks.iter().map(|&v| tick_label(v)).collect();
+        assert_eq!(labels.join(" "), "16 32 64 128 256 512 1024");
+        let (lo, hi) = log_range([2e-6, 3e-3].into_iter()).unwrap();
+        let ticks = log_ticks(lo, hi, width);
+        assert!(ticks.contains(&2e-6) && ticks.contains(&5e-5), "{ticks:?}");
+        assert_eq!(tick_label(5e-5), "5e-5");
+        let (lo, hi) = log_range([1.0, 1e6].into_iter()).unwrap();
+        let ticks = log_ticks(lo, hi, 400.0);
+        assert!(ticks.iter().all(|v| v.log10().fract() == 0.0), "{ticks:?}");
+        for (values, pixels) in [
+            (vec![16.0, 64.0], width),
+            (vec![16.0, 1024.0], 300.0),
+            (vec![4.0, 65536.0], width),
+            (vec![1e-7, 10.0], width),
+            (vec![1e-7, 10.0], 200.0),
+            (vec![0.011, 0.09], width),
+        ] {
+            let (lo, hi) = log_range(values.iter().copied()).unwrap();
+            let ticks = log_ticks(lo, hi, pixels);
+            assert!(!ticks.is_empty(), "{values:?}");
+            assert!(
+                ticks.iter().all(|t| lo <= *t && *t <= hi),
+                "{values:?}: {ticks:?}"
+            );
+            let at = |v: f64| (v / lo).log10() / (hi / lo).log10() * pixels;
+            for w in ticks.windows(2) {
+                let room = (tick_label(w[0]).len() + tick_label(w[1]).len()) as f64 * 4.0;
+                assert!(
+                    at(w[1]) - at(w[0]) > room,
+                    "{values:?} at {pixels} px: {ticks:?}"
+                );
+            }
+        }
     }
 
     /// Every axis range holds a power of ten (where plotters puts its labels) and all the values.

@@ -26,8 +26,8 @@ const TITLE: usize = 34;
 /// Gap between panels, pixels.
 const GAP: usize = 8;
 
-/// Writes `panels` in rows of `columns` under `title` as an RGB PNG, with the tone map stated in a
-/// footer line.
+/// Writes `panels` in rows of `columns` under `title` (its long numbers shortened, as in plots) as an
+/// RGB PNG, with the tone map stated in a footer line.
 pub fn write_sheet(path: &Path, title: &str, panels: &[Panel], columns: usize) -> Result<()> {
     if panels.is_empty() || columns == 0 {
         return Err(Error::Numerical(format!(
@@ -54,7 +54,7 @@ pub fn write_sheet(path: &Path, title: &str, panels: &[Panel], columns: usize) -
                 (x as i32, y as i32),
             )
         };
-        text(title, GAP, 6, 20).map_err(|e| fail(&e))?;
+        text(&super::plot::short_numbers(title), GAP, 6, 20).map_err(|e| fail(&e))?;
         for (p, panel) in panels.iter().enumerate() {
             let (col, row) = (p % columns, p / columns);
             let x0 = GAP + col * (PANEL + GAP);

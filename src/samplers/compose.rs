@@ -67,6 +67,9 @@ impl Sampler for Paired {
     fn check_n(&self, n: usize) -> std::result::Result<(), usize> {
         self.inner.check_n(n)
     }
+    fn check_parameters(&self, n: usize) -> Result<()> {
+        self.inner.check_parameters(n)
+    }
     fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64> {
         let first = self.inner.generate(n, rng);
         let second = self.inner.generate(n, rng);
@@ -136,6 +139,9 @@ impl Sampler for Sheared {
     }
     fn check_n(&self, n: usize) -> std::result::Result<(), usize> {
         self.inner.check_n(n)
+    }
+    fn check_parameters(&self, n: usize) -> Result<()> {
+        self.inner.check_parameters(n)
     }
     fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64> {
         let mut set = self.inner.generate(n, rng);

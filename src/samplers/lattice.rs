@@ -155,7 +155,8 @@ impl Sampler for Lattice {
 
 /// A randomly shifted rank-1 lattice with a generating vector the user gives (sampler
 /// `lattice:Z1:Z2[:Z3:Z4]`), e.g. a published one: the points `frac(i z / N + shift)`, each `z_d`
-/// taken mod N. Entries coprime to N keep every coordinate N-stratified.
+/// taken mod N. Every entry must be coprime to N, which keeps each coordinate N-stratified: an entry
+/// sharing the factor `d` with N gives only N / d distinct values in its coordinate (0 gives one).
 #[derive(Clone, Debug)]
 pub struct GivenLattice {
     z: Vec<u64>,
@@ -197,6 +198,35 @@ impl Sampler for GivenLattice {
     }
     fn check_n(&self, n: usize) -> std::result::Result<(), usize> {
         check_lattice_n(n)
+    }
+    fn check_parameters(&self, n: usize) -> Result<()> {
+        let residue = |zd: u64| (zd % n as u64) as usize;
+        let Some((d, &zd)) = self
+            .z
+            .iter()
+            .enumerate()
+            .find(|&(_, &zd)| gcd(residue(zd), n) != 1)
+        else {
+            return Ok(());
+        };
+        let (r, factor) = (residue(zd), gcd(residue(zd), n));
+        // The residue nearest r that is coprime to n, the smaller on ties (1 always is), suggested
+        // as the entry nearest zd with that residue.
+        let coprime = (1..n)
+            .flat_map(|step| [r.checked_sub(step), Some(r + step)])
+            .flatten()
+            .find(|&c| (1..n).contains(&c) && gcd(c, n) == 1)
+            .unwrap_or(1);
+        let suggestion = zd - r as u64 + coprime as u64;
+        let axis = ["x", "y", "u", "v"][d];
+        let values = match n / factor {
+            1 => "a single value".to_string(),
+            v => format!("only {v} distinct values"),
+        };
+        Err(Error::Usage(format!(
+            "{}: the entry {zd} for {axis} shares the factor {factor} with N = {n}, so {axis} takes {values}; give an entry coprime to {n} instead, e.g. {suggestion}",
+            self.name()
+        )))
     }
     fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64> {
         shifted_lattice(&self.z, n, rng)
@@ -244,6 +274,34 @@ mod tests {
             .map(|(a, b)| (a * a + b * b) as u128)
             .min()
             .unwrap()
+    }
+
+    /// The built-in generating vectors (2D, Korobov 4D, Fibonacci) pass the coprimality check that
+    /// `lattice:Z` must; an entry sharing a factor with N, 0 included, is refused naming it.
+    #[test]
+    fn built_in_vectors_are_coprime_and_degenerate_ones_refused() {
+        for n in (1..=300).chain([1000, 1024, 4096]) {
+            for dims in [2, 4] {
+                let z: Vec<u64> = generating_vector(n, dims)
+                    .iter()
+                    .map(|&c| c as u64)
+                    .collect();
+                assert!(
+                    GivenLattice { z }.check_parameters(n).is_ok(),
+                    "n = {n}, {dims}D"
+                );
+            }
+        }
+        assert!(GivenLattice { z: vec![1, 34] }.check_parameters(89).is_ok());
+        for (z, n, says) in [
+            (vec![0, 0], 8, "the entry 0 for x shares the factor 8 with N = 8, so x takes a single value"),
+            (vec![1, 4], 8, "the entry 4 for y shares the factor 4 with N = 8, so y takes only 2 distinct values; give an entry coprime to 8 instead, e.g. 3"),
+            (vec![1, 163, 271, 141], 9, "the entry 141 for v shares the factor 3 with N = 9, so v takes only 3 distinct values; give an entry coprime to 9 instead, e.g. 140"),
+        ] {
+            let e = GivenLattice { z }.check_parameters(n).unwrap_err();
+            assert_eq!(e.exit_code(), 2);
+            assert!(e.to_string().contains(says), "{e}");
+        }
     }
 
     #[test]

@@ -32,7 +32,15 @@ pub trait Sampler: Send + Sync {
     /// which it does.
     fn check_n(&self, n: usize) -> std::result::Result<(), usize>;
 
-    /// One set of `n` points, `[n, dims]` row-major, in `[0,1)^dims`. `n` has passed [`Sampler::check_n`].
+    /// A usage error, naming the parameter at fault and a fix, if the construction exists for `n`
+    /// (it passed [`Sampler::check_n`]) but its parameters make a degenerate set there (a lattice
+    /// whose generating vector shares a factor with `n`). Most samplers have no such parameters.
+    fn check_parameters(&self, _n: usize) -> Result<()> {
+        Ok(())
+    }
+
+    /// One set of `n` points, `[n, dims]` row-major, in `[0,1)^dims`. `n` has passed [`Sampler::check_n`]
+    /// and [`Sampler::check_parameters`].
     fn generate(&self, n: usize, rng: &mut Rng) -> Vec<f64>;
 
     /// One set moved by the Cranley–Patterson rotation `shift` (one entry per dimension, in `[0,1)`),
@@ -46,7 +54,7 @@ pub trait Sampler: Send + Sync {
     }
 }
 
-/// Checks `n` for `sampler`, with a message naming the nearest valid `n`. One set of `n` points must fit
+/// Checks `n` for `sampler`, with a message naming the nearest valid `n`, and its parameters at `n`. One set of `n` points must fit
 /// under [`crate::points::MAX_COORDINATES`]; the commands check every N here before drawing.
 pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
     if n == 0 {
@@ -62,7 +70,8 @@ pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
             "{} cannot make {n} points; the nearest N it allows is {nearest}",
             sampler.name()
         ))
-    })
+    })?;
+    sampler.check_parameters(n)
 }
 
 /// `n` if the sampler allows it, else its nearest valid N.

@@ -331,22 +331,13 @@ fn optimize_with_bar(
     out
 }
 
-/// The C name of the table `-o output`: `anisospec_` and the file stem, lower case, with every
-/// character that is not an ASCII letter or digit made `_` (`out/Fan-A.npy` → `anisospec_fan_a`), so
-/// that tables of different names can be included in one C file.
+/// The C name of the table `-o output`: `anisospec_` and the file stem, lower case, with every run
+/// of characters that are not ASCII letters or digits made one `_` (the report's `slug`:
+/// `out/Fan-A.npy` → `anisospec_fan_a`), so that tables of different names can be included in one
+/// C file.
 fn c_name(output: &Path) -> String {
     let stem = output.file_stem().unwrap_or_default().to_string_lossy();
-    let body: String = stem
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() {
-                c.to_ascii_lowercase()
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    format!("anisospec_{body}")
+    format!("anisospec_{}", crate::compare::report::slug(&stem))
 }
 
 /// A C header with the same numbers as the npy table: `static const double NAME[sets][n][dims]` and

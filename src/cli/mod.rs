@@ -80,14 +80,12 @@ pub fn parse_count(text: &str) -> std::result::Result<usize, String> {
 /// Checks that a list of N (`-n 16,64,256`) names each N once: a repeat would measure the same thing
 /// twice and print it as two rows.
 pub fn distinct_counts(ns: &[usize]) -> Result<()> {
-    for (i, n) in ns.iter().enumerate() {
-        if ns[..i].contains(n) {
-            return Err(Error::Usage(format!(
-                "-n lists {n} twice; give each N once (e.g. -n 16,64,256)"
-            )));
-        }
+    match crate::compare::config::first_repeat(ns) {
+        Some(n) => Err(Error::Usage(format!(
+            "-n lists {n} twice; give each N once (e.g. -n 16,64,256)"
+        ))),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Parses `--shear-mode`.

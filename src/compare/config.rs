@@ -429,7 +429,7 @@ impl CompareConfig {
 }
 
 /// The first item of `list` that appears in it again.
-fn first_repeat<T: PartialEq>(list: &[T]) -> Option<&T> {
+pub(crate) fn first_repeat<T: PartialEq>(list: &[T]) -> Option<&T> {
     list.iter()
         .enumerate()
         .find(|&(i, x)| list[..i].contains(x))

@@ -54,8 +54,9 @@ pub trait Sampler: Send + Sync {
     }
 }
 
-/// Checks `n` for `sampler`, with a message naming the nearest valid `n`, and its parameters at `n`. One set of `n` points must fit
-/// under [`crate::points::MAX_COORDINATES`]; the commands check every N here before drawing.
+/// Checks `n` for `sampler`, with a message naming the nearest valid `n`, and its parameters at `n`.
+/// One set of `n` points must fit under [`crate::points::MAX_COORDINATES`]; the commands check every
+/// N here before drawing.
 pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
     if n == 0 {
         return Err(Error::Usage(format!(

@@ -15,7 +15,9 @@ pub struct CompareArgs {
     /// Run the paper-scale preset instead of the default (N up to 4096, 1000 realizations; hours).
     #[arg(long)]
     pub full: bool,
-    /// Report folder: report.md, plots/, spectra/, CSV and npy.
+    /// Report folder: report.md, plots/, spectra/, CSV and npy. A new report replaces an earlier one
+    /// there (its PNG, CSV and npy files go; other files stay); a folder of other files is refused, and
+    /// so is a --cache inside it.
     #[arg(long, default_value = "out/compare")]
     pub out: PathBuf,
     /// Cache of pixel references and optimized tables, reused across runs (default $ANISOSPEC_CACHE

@@ -34,7 +34,8 @@ const GALLERY_4D: [&str; 9] = [
 /// Spectra of every classical sampler in one folder.
 #[derive(Debug, clap::Args)]
 pub struct GalleryArgs {
-    /// Output folder; the gallery goes in OUT/gallery.
+    /// Output folder; the gallery goes in OUT/gallery, replacing an earlier gallery there (a
+    /// gallery folder of other files is refused).
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
     /// Points per set; a sampler that cannot make this N uses its nearest valid N (the index says which).
@@ -66,7 +67,7 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
     let method = Method::nufft(args.eps)?;
     let gallery = args.out.join("gallery");
     // The whole gallery or nothing: a failure leaves an earlier one as it was.
-    write_folder(&gallery, |dir| {
+    write_folder(&gallery, "index.md", "--out", |dir| {
         let mut rows = Vec::new();
         let mut spectra = Vec::new();
         let jobs = GALLERY_2D

@@ -20,6 +20,7 @@ use crate::render::scene::Scene;
 pub use crate::samplers::usable_n;
 use crate::samplers::{self, Sampler, Sheared};
 use config::CompareConfig;
+use report::REPORT_FILE;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -251,6 +252,8 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
 pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outcome> {
     config.validate()?;
     check_folder(out, "--out", "report")?;
+    crate::output::check_report_folder(out, REPORT_FILE, "--out")?;
+    check_cache_outside(cache_dir, out)?;
     check_folder(cache_dir, "--cache", "cache")?;
     let started = Instant::now();
     let subjects = subjects(config, cache_dir)?;
@@ -310,7 +313,7 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
         seconds: started.elapsed().as_secs_f64(),
     };
     // The whole folder or nothing: a failure while writing it leaves an earlier report as it was.
-    crate::output::write_folder(out, |staging| {
+    crate::output::write_folder(out, REPORT_FILE, "--out", |staging| {
         report::write(&outcome, &specs, &tables, staging)
     })?;
     Ok(outcome)
@@ -332,6 +335,22 @@ fn check_folder(dir: &Path, flag: &str, what: &str) -> Result<()> {
         }
         None => Ok(()),
     }
+}
+
+/// Refuses a cache folder inside the report folder `out` (or the same folder), before any work: a report
+/// folder holds one report, which the next replaces, and a cache growing in it would make the folder
+/// look like someone else's at the end of the run.
+fn check_cache_outside(cache_dir: &Path, out: &Path) -> Result<()> {
+    use crate::output::resolved;
+    if resolved(cache_dir)?.starts_with(resolved(out)?) {
+        return Err(Error::Usage(format!(
+            "--cache {} lies inside the report folder --out {}; keep the cache beside the report \
+             (the default is out/cache beside out/compare)",
+            cache_dir.display(),
+            out.display()
+        )));
+    }
+    Ok(())
 }
 
 /// The samplers that follow the oracle (sheared and optimized), on the subjects that have a shear,

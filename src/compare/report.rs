@@ -17,6 +17,9 @@ use crate::targets::Target;
 use std::io::Write;
 use std::path::Path;
 
+/// The report's main file; a folder holding it holds an earlier report, which a new one replaces.
+pub const REPORT_FILE: &str = "report.md";
+
 /// A file-name-safe version of a label.
 pub fn slug(label: &str) -> String {
     let s: String = label
@@ -413,7 +416,7 @@ fn write_markdown(
 ) -> Result<()> {
     let c = &outcome.config;
     let r = c.realizations;
-    write_atomic(&out.join("report.md"), |w| {
+    write_atomic(&out.join(REPORT_FILE), |w| {
         writeln!(w, "# anisospec compare\n")?;
         writeln!(
             w,

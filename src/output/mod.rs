@@ -98,19 +98,75 @@ pub fn write_group<T>(
     Ok(value)
 }
 
-/// Writes a folder of outputs as a group (a report, a gallery): `write` fills a temporary folder
+/// The extensions of the data and pictures a report or gallery writes: the files of an earlier report
+/// that a new one replaces. Other files in its folder (notes, a study's TOML) are left alone.
+const REPORT_FILE_EXTENSIONS: [&str; 3] = ["png", "npy", "csv"];
+
+/// Checks, before any work, that `dest` (given by `flag`) may take a report whose main file is
+/// `marker` (`report.md`, `index.md`): it is missing, empty, or holds an earlier report (its `marker`).
+/// A new report replaces an earlier one's data and pictures, so a folder of other files is refused
+/// with a usage error naming it and the fix, and nothing in it is touched.
+pub fn check_report_folder(dest: &Path, marker: &str, flag: &str) -> Result<()> {
+    if !dest.is_dir() || dest.join(marker).is_file() {
+        return Ok(());
+    }
+    let entries = std::fs::read_dir(dest).map_err(|e| Error::io("read the folder", dest, e))?;
+    let mut others = Vec::new();
+    for entry in entries {
+        let name = entry
+            .map_err(|e| Error::io("read the folder", dest, e))?
+            .file_name();
+        if !is_staging(&name) {
+            others.push(name.to_string_lossy().into_owned());
+        }
+    }
+    if others.is_empty() {
+        return Ok(());
+    }
+    others.sort();
+    let shown = others
+        .iter()
+        .take(3)
+        .cloned()
+        .collect::<Vec<_>>()
+        .join(", ");
+    let more = if others.len() > 3 { ", ..." } else { "" };
+    Err(Error::Usage(format!(
+        "{} holds other files ({shown}{more}) and no {marker}, so it is not an earlier report, and a \
+         new report replaces the data and pictures of the one before it; give {flag} a new or empty folder",
+        dest.display()
+    )))
+}
+
+/// Whether a folder entry is a temporary file or folder of this crate (an atomic write in progress,
+/// or one a killed run left behind).
+fn is_staging(name: &std::ffi::OsStr) -> bool {
+    name.to_string_lossy().starts_with(".anisospec-")
+}
+
+/// Writes a report folder as a whole (a compare report, a gallery): `write` fills a temporary folder
 /// inside `dest`, and only when it succeeds, and no file of the new set clashes with a folder of the
-/// old (or a folder with a file), are the files it wrote moved into `dest`: subfolders merged, files
-/// of the same names replaced, other files left alone. On failure none of `dest`'s files is touched,
-/// `dest` itself goes again if this call created it, and an error names the final path, not the
-/// temporary one.
-pub fn write_folder<T>(dest: &Path, write: impl FnOnce(&Path) -> Result<T>) -> Result<T> {
+/// old (or a folder with a file), are the files it wrote moved into `dest`. The new report then
+/// replaces the old one: in `dest` and in each subfolder the new report wrote, every data file or
+/// picture (`.png`, `.npy`, `.csv`) it did not write goes, so no stale plot of an earlier study stays
+/// beside the new ones; other files, other subfolders and the targets of links are left alone. `dest`
+/// must pass [`check_report_folder`] with `marker`, the file every report writes. On failure none of
+/// `dest`'s files is touched, `dest` itself goes again if this call created it, and an error names the
+/// final path, not the temporary one.
+pub fn write_folder<T>(
+    dest: &Path,
+    marker: &str,
+    flag: &str,
+    write: impl FnOnce(&Path) -> Result<T>,
+) -> Result<T> {
+    check_report_folder(dest, marker, flag)?;
     let created = !dest.exists();
     let result = staging_folder(dest).and_then(|staging| {
         let value =
             write(staging.path()).map_err(|e| e.with_path_replaced(staging.path(), dest))?;
         check_tree(staging.path(), dest)?;
-        move_tree(staging.path(), dest)?;
+        let written = move_tree(staging.path(), dest)?;
+        prune_stale(dest, &written)?;
         Ok(value)
     });
     if result.is_err() && created {
@@ -173,15 +229,50 @@ fn check_tree(from: &Path, to: &Path) -> Result<()> {
     })
 }
 
-/// Moves every file under `from` to the same place under `to`, creating subfolders as needed.
-fn move_tree(from: &Path, to: &Path) -> Result<()> {
+/// Moves every file under `from` to the same place under `to`, creating subfolders as needed, and
+/// returns the paths it wrote under `to`, files and folders.
+fn move_tree(from: &Path, to: &Path) -> Result<Vec<PathBuf>> {
+    let mut written = Vec::new();
     walk_tree(from, to, &mut |path, target, is_folder| {
         if is_folder {
-            std::fs::create_dir_all(target).map_err(|e| Error::io("create the folder", target, e))
+            std::fs::create_dir_all(target)
+                .map_err(|e| Error::io("create the folder", target, e))?;
         } else {
-            move_file(path, target)
+            move_file(path, target)?;
         }
-    })
+        written.push(target.to_path_buf());
+        Ok(())
+    })?;
+    Ok(written)
+}
+
+/// Removes the stale outputs of an earlier report from `dest` and from each folder in `written`: the
+/// files with a report extension ([`REPORT_FILE_EXTENSIONS`]) that are not in `written`. Links are
+/// removed, never followed; temporary files of this crate are left to their owner.
+fn prune_stale(dest: &Path, written: &[PathBuf]) -> Result<()> {
+    let folders =
+        std::iter::once(dest).chain(written.iter().map(PathBuf::as_path).filter(|p| p.is_dir()));
+    for dir in folders {
+        let entries = std::fs::read_dir(dir).map_err(|e| Error::io("read the folder", dir, e))?;
+        for entry in entries {
+            let entry = entry.map_err(|e| Error::io("read the folder", dir, e))?;
+            let path = entry.path();
+            let kind = entry
+                .file_type()
+                .map_err(|e| Error::io("read the folder", dir, e))?;
+            let is_output = path
+                .extension()
+                .is_some_and(|e| REPORT_FILE_EXTENSIONS.iter().any(|r| e == *r));
+            if kind.is_dir() || !is_output || is_staging(&entry.file_name()) {
+                continue;
+            }
+            if !written.contains(&path) {
+                std::fs::remove_file(&path)
+                    .map_err(|e| Error::io("remove the stale output", &path, e))?;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Renames `from` onto `to`; where `to` lies on another file system (a linked subfolder), copies it
@@ -317,6 +408,30 @@ pub fn file_in_the_way(dir: &Path) -> Option<&Path> {
     dir.ancestors().find(|a| a.exists()).filter(|a| !a.is_dir())
 }
 
+/// The absolute path of `path`, whether it exists or not: links and `..` resolved in the part that
+/// exists, `.` and `..` taken literally in the rest.
+pub fn resolved(path: &Path) -> Result<PathBuf> {
+    let absolute = std::path::absolute(path).map_err(|e| Error::io("resolve", path, e))?;
+    let existing = absolute
+        .ancestors()
+        .find(|a| a.exists())
+        .unwrap_or(Path::new("/"));
+    let mut out = existing
+        .canonicalize()
+        .map_err(|e| Error::io("resolve", existing, e))?;
+    let rest = absolute.strip_prefix(existing).unwrap_or(Path::new(""));
+    for part in rest.components() {
+        match part {
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            std::path::Component::Normal(name) => out.push(name),
+            _ => {}
+        }
+    }
+    Ok(out)
+}
+
 /// Whether two paths name the same file: the same absolute path, or the same file once links are
 /// resolved (when both exist).
 fn same_file(a: &Path, b: &Path) -> bool {
@@ -369,12 +484,12 @@ mod tests {
     }
 
     /// A folder whose writing fails keeps its old files and gets no new one, and goes if the call
-    /// created it; one that succeeds gets every file, subfolders merged and other files left alone.
+    /// created it; one that succeeds gets every file, subfolders merged.
     #[test]
     fn a_failed_folder_writes_nothing() {
         let dir = tempfile::tempdir().unwrap();
         let report = dir.path().join("report");
-        let failed = write_folder(&report, |stage| {
+        let failed = write_folder(&report, "a.md", "--out", |stage| {
             write_atomic(&stage.join("a.md"), |w| writeln!(w, "a"))?;
             Err::<(), _>(Error::Numerical("the plot failed".into()))
         });
@@ -387,7 +502,7 @@ mod tests {
         std::fs::create_dir_all(report.join("plots")).unwrap();
         std::fs::write(report.join("a.md"), "old").unwrap();
         std::fs::write(report.join("plots/keep.png"), "kept").unwrap();
-        let failed = write_folder(&report, |stage| {
+        let failed = write_folder(&report, "a.md", "--out", |stage| {
             write_atomic(&stage.join("a.md"), |w| writeln!(w, "new"))?;
             Err::<(), _>(Error::Numerical("the plot failed".into()))
         });
@@ -395,7 +510,7 @@ mod tests {
         assert_eq!(std::fs::read_to_string(report.join("a.md")).unwrap(), "old");
         assert!(leftovers(&report).is_empty());
 
-        write_folder(&report, |stage| {
+        write_folder(&report, "a.md", "--out", |stage| {
             write_atomic(&stage.join("a.md"), |w| writeln!(w, "new"))?;
             write_atomic(&stage.join("plots/b.png"), |w| writeln!(w, "b"))
         })
@@ -408,11 +523,102 @@ mod tests {
             std::fs::read_to_string(report.join("plots/b.png")).unwrap(),
             "b\n"
         );
-        assert_eq!(
-            std::fs::read_to_string(report.join("plots/keep.png")).unwrap(),
-            "kept"
+        assert!(
+            !report.join("plots/keep.png").exists(),
+            "a stale plot of the earlier report stays"
         );
         assert!(leftovers(&report).is_empty());
+    }
+
+    /// A new report replaces the data and pictures of the earlier one, in its folder and in the
+    /// subfolders it writes; other files, folders it does not write, and the targets of links stay.
+    #[cfg(unix)]
+    #[test]
+    fn a_new_report_replaces_the_old_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let report = dir.path().join("report");
+        let outside = dir.path().join("outside");
+        std::fs::create_dir_all(report.join("plots")).unwrap();
+        std::fs::create_dir_all(report.join("cache")).unwrap();
+        std::fs::create_dir_all(&outside).unwrap();
+        for (file, text) in [
+            ("report.md", "old"),
+            ("old.csv", "old"),
+            ("notes.txt", "mine"),
+            ("plots/old.png", "old"),
+            ("plots/kept.png", "old"),
+            ("cache/table.npy", "cached"),
+        ] {
+            std::fs::write(report.join(file), text).unwrap();
+        }
+        std::fs::write(outside.join("data.npy"), "theirs").unwrap();
+        std::os::unix::fs::symlink(outside.join("data.npy"), report.join("linked.npy")).unwrap();
+        write_folder(&report, "report.md", "--out", |stage| {
+            write_atomic(&stage.join("report.md"), |w| writeln!(w, "new"))?;
+            write_atomic(&stage.join("plots/kept.png"), |w| writeln!(w, "new"))
+        })
+        .unwrap();
+        let read = |f: &str| std::fs::read_to_string(report.join(f)).ok();
+        assert_eq!(read("report.md").as_deref(), Some("new\n"));
+        assert_eq!(read("plots/kept.png").as_deref(), Some("new\n"));
+        assert_eq!(read("old.csv"), None);
+        assert_eq!(read("plots/old.png"), None);
+        assert_eq!(read("notes.txt").as_deref(), Some("mine"));
+        assert_eq!(read("cache/table.npy").as_deref(), Some("cached"));
+        assert!(report.join("linked.npy").symlink_metadata().is_err());
+        assert_eq!(
+            std::fs::read_to_string(outside.join("data.npy")).unwrap(),
+            "theirs"
+        );
+        assert!(leftovers(&report).is_empty());
+    }
+
+    /// A folder of other files (no earlier report in it) is refused with a usage error naming it, and
+    /// nothing in it changes; an empty folder, or one holding only a killed run's temporary folder,
+    /// takes a report.
+    #[test]
+    fn a_folder_of_other_files_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let folder = dir.path().join("sources");
+        std::fs::create_dir_all(&folder).unwrap();
+        std::fs::write(folder.join("data.npy"), "mine").unwrap();
+        let e = write_folder(&folder, "report.md", "--out", |stage| {
+            write_atomic(&stage.join("report.md"), |w| writeln!(w, "new"))
+        })
+        .unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        let text = e.to_string();
+        assert!(
+            text.contains("data.npy") && text.contains("no report.md") && text.contains("--out"),
+            "{text}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(folder.join("data.npy")).unwrap(),
+            "mine"
+        );
+        assert!(!folder.join("report.md").exists());
+        assert!(leftovers(&folder).is_empty());
+
+        let empty = dir.path().join("empty");
+        std::fs::create_dir_all(empty.join(".anisospec-killed")).unwrap();
+        write_folder(&empty, "report.md", "--out", |stage| {
+            write_atomic(&stage.join("report.md"), |w| writeln!(w, "new"))
+        })
+        .unwrap();
+        assert!(empty.join("report.md").is_file());
+    }
+
+    /// A path resolves through its existing part (links, `..`) and literally beyond it.
+    #[test]
+    fn paths_resolve_beyond_what_exists() {
+        let dir = tempfile::tempdir().unwrap();
+        let base = dir.path().canonicalize().unwrap();
+        std::fs::create_dir_all(base.join("a")).unwrap();
+        assert_eq!(
+            resolved(&base.join("a/../b/c/../d")).unwrap(),
+            base.join("b/d")
+        );
+        assert_eq!(resolved(&base.join("a/./e")).unwrap(), base.join("a/e"));
     }
 
     /// A folder standing where a new file goes stops the move before any file moves, with a usage
@@ -422,7 +628,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let report = dir.path().join("report");
         std::fs::create_dir_all(report.join("z.md")).unwrap();
-        let e = write_folder(&report, |stage| {
+        std::fs::write(report.join("a.md"), "an earlier report").unwrap();
+        let e = write_folder(&report, "a.md", "--out", |stage| {
             write_atomic(&stage.join("a.md"), |w| writeln!(w, "a"))?;
             write_atomic(&stage.join("z.md"), |w| writeln!(w, "z"))
         })
@@ -433,7 +640,10 @@ mod tests {
                 .contains("a folder stands where the file goes"),
             "{e}"
         );
-        assert!(!report.join("a.md").exists());
+        assert_eq!(
+            std::fs::read_to_string(report.join("a.md")).unwrap(),
+            "an earlier report"
+        );
         assert!(leftovers(&report).is_empty());
 
         let a = dir.path().join("a.csv");
@@ -472,7 +682,8 @@ mod tests {
         let report = dir.path().join("report");
         std::fs::create_dir_all(&report).unwrap();
         std::os::unix::fs::symlink(elsewhere.path(), report.join("plots")).unwrap();
-        write_folder(&report, |stage| {
+        std::fs::write(report.join("a.md"), "an earlier report").unwrap();
+        write_folder(&report, "a.md", "--out", |stage| {
             write_atomic(&stage.join("plots/a.png"), |w| writeln!(w, "a"))
         })
         .unwrap();

@@ -247,8 +247,9 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
     Ok(out)
 }
 
-/// Runs the study and writes the report folder `out`. A bad config, or an `out` or `cache_dir` that
-/// is (or lies under) a file, is refused before any work.
+/// Runs the study and writes the report folder `out`, replacing an earlier report there. A bad config,
+/// an `out` or `cache_dir` that is (or lies under) a file, an `out` holding other files than an earlier
+/// report, and a `cache_dir` inside `out` are refused before any work.
 pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outcome> {
     config.validate()?;
     check_folder(out, "--out", "report")?;

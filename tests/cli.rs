@@ -693,6 +693,48 @@ fn compare_rejects_a_bad_config_before_any_work() {
     }
 }
 
+/// A compare config may leave keys out: each takes the built-in default's value. An `[[analytic]]`
+/// entry is one integrand and still needs all its keys; an unknown key is still refused.
+#[test]
+fn compare_config_fills_left_out_keys_from_the_default() {
+    let (_dir, config) = tmp("study.toml");
+    std::fs::write(&config, "ns = [16, 64]\nrealizations = 8\n").unwrap();
+    let expected = CompareConfig {
+        ns: vec![16, 64],
+        realizations: 8,
+        ..CompareConfig::default_suite()
+    };
+    assert_eq!(CompareConfig::load(&config).unwrap(), expected);
+
+    let entry = "[[analytic]]\nlabel = \"edge\"\nspec = \"sheared:s=0.5@xu\"\nshear = [0.5, 0.5]\n";
+    std::fs::write(&config, format!("{entry}shear_range = [0.5, 0.5]\n")).unwrap();
+    let study = CompareConfig::load(&config).unwrap();
+    assert_eq!(
+        study.analytic.len(),
+        1,
+        "analytic replaces the default's list"
+    );
+    assert_eq!(study.analytic[0].label, "edge");
+    assert_eq!(study.ns, CompareConfig::default_suite().ns);
+
+    for (text, needle) in [
+        (entry.to_string(), "shear_range"),
+        (
+            format!("{entry}shear_range = [0.5, 0.5]\nwidth = 2\n"),
+            "width",
+        ),
+        ("realizations = 8\nseeds = 3\n".to_string(), "seeds"),
+    ] {
+        std::fs::write(&config, &text).unwrap();
+        let err = CompareConfig::load(&config).unwrap_err();
+        assert_eq!(err.exit_code(), 2, "{text}");
+        assert!(
+            err.to_string().contains(needle),
+            "{text}: '{err}' lacks '{needle}'"
+        );
+    }
+}
+
 /// Numbers and names in a compare config that would fail late, panic, write a number that is not one,
 /// or overwrite one output with another are refused up front: exit 2, a message naming the config key
 /// (not a command-line flag), and no report folder.

@@ -1,5 +1,6 @@
 //! What `anisospec compare` runs: samplers, integrands, sizes and realizations. Built-in presets
-//! (a small default and a paper-scale `--full`) or a strict TOML file.
+//! (a small default and a paper-scale `--full`) or a strict TOML file, in which every key is optional
+//! (a key left out takes the default suite's value) and an unknown key is refused.
 
 use crate::error::{Error, Result};
 use crate::points::shear::{ShearMode, MAX_SHEAR};
@@ -31,8 +32,14 @@ pub struct AnalyticEntry {
 }
 
 /// The whole study.
+///
+/// In a TOML file every key is optional: a key left out takes its value in
+/// [`CompareConfig::default_suite`] (so `ns = [16, 64]` alone is the default study at two sizes). A
+/// key given replaces the default's whole value; `analytic`, for one, replaces the default's
+/// integrands rather than adding to them, and each of its entries needs all four keys. An unknown
+/// (say, misspelt) key is refused.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default = "CompareConfig::default_suite")]
 pub struct CompareConfig {
     /// Points per pixel / estimate.
     pub ns: Vec<usize>,
@@ -156,7 +163,8 @@ impl CompareConfig {
         }
     }
 
-    /// Reads a TOML config; unknown keys, missing keys and bad values are input errors.
+    /// Reads a TOML config. A key left out takes the default suite's value; unknown keys and bad
+    /// values are input errors.
     pub fn load(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::read_input(path, e))?;
         let config: Self =
@@ -455,4 +463,22 @@ pub fn check_file_names(labels: &[String], what: &str) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Writes `text` to a temporary `study.toml` and loads it.
+    fn load_text(text: &str) -> Result<CompareConfig> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("study.toml");
+        std::fs::write(&path, text).unwrap();
+        CompareConfig::load(&path)
+    }
+
+    #[test]
+    fn an_empty_file_is_the_default_suite() {
+        assert_eq!(load_text("").unwrap(), CompareConfig::default_suite());
+    }
 }

@@ -735,6 +735,62 @@ fn compare_config_fills_left_out_keys_from_the_default() {
     }
 }
 
+/// `compare --print-config` prints the study it would run as TOML that loads back to the same config,
+/// runs nothing and writes no file; with `--config` it prints the file's study, defaults filled in.
+#[test]
+fn compare_print_config_prints_the_study_as_toml() {
+    let dir = tempfile::tempdir().unwrap();
+    let print = |args: &[&str], cwd: &Path| {
+        let o = Command::new(env!("CARGO_BIN_EXE_anisospec"))
+            .args(["compare", "--print-config"])
+            .args(args)
+            .current_dir(cwd)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{args:?}: {err}");
+        assert!(err.is_empty(), "{args:?} wrote to stderr: {err}");
+        toml::from_str::<CompareConfig>(&String::from_utf8(o.stdout).unwrap()).unwrap()
+    };
+    assert_eq!(print(&[], dir.path()), CompareConfig::default_suite());
+    assert_eq!(print(&["--full"], dir.path()), CompareConfig::full_suite());
+    assert_eq!(
+        print(&["--seed", "7"], dir.path()),
+        CompareConfig {
+            seed: 7,
+            ..CompareConfig::default_suite()
+        }
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "a file was written"
+    );
+
+    // A partial file, read where its default table targets are found (the crate's root).
+    let config = dir.path().join("study.toml");
+    std::fs::write(&config, "ns = [16, 64]\nrealizations = 8\n").unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    assert_eq!(
+        print(&["--config", config.to_str().unwrap()], root),
+        CompareConfig {
+            ns: vec![16, 64],
+            realizations: 8,
+            ..CompareConfig::default_suite()
+        }
+    );
+
+    // Nothing is written, so --out and --cache would be ignored: refused.
+    let out = dir.path().join("report");
+    for flag in ["--out", "--cache"] {
+        rejects(
+            &["compare", "--print-config", flag, out.to_str().unwrap()],
+            "--print-config",
+            &out,
+        );
+    }
+}
+
 /// Numbers and names in a compare config that would fail late, panic, write a number that is not one,
 /// or overwrite one output with another are refused up front: exit 2, a message naming the config key
 /// (not a command-line flag), and no report folder.

@@ -176,6 +176,14 @@ impl CompareConfig {
         Ok(config)
     }
 
+    /// The study as TOML text that [`CompareConfig::load`] reads back to the same config, every key
+    /// written out. Fails only on a table path that is not UTF-8, which TOML cannot hold (a config
+    /// read from TOML has none).
+    pub fn to_toml(&self) -> Result<String> {
+        toml::to_string(self)
+            .map_err(|e| Error::Usage(format!("the study cannot be written as TOML: {e}")))
+    }
+
     /// Checks, before any work, everything in the config that would otherwise fail mid-run, put a
     /// number that is not one in the report, or make two outputs share a file name.
     pub fn validate(&self) -> Result<()> {
@@ -478,7 +486,36 @@ mod tests {
     }
 
     #[test]
+    fn printed_configs_load_back_unchanged() {
+        let largest_seed = CompareConfig {
+            seed: u64::MAX,
+            ..CompareConfig::default_suite()
+        };
+        for preset in [
+            CompareConfig::default_suite(),
+            CompareConfig::full_suite(),
+            largest_seed,
+        ] {
+            let text = preset.to_toml().unwrap();
+            assert_eq!(load_text(&text).unwrap(), preset, "{text}");
+        }
+    }
+
+    #[test]
     fn an_empty_file_is_the_default_suite() {
         assert_eq!(load_text("").unwrap(), CompareConfig::default_suite());
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_table_path_that_is_not_utf8_is_a_usage_error() {
+        use std::os::unix::ffi::OsStrExt;
+        let study = CompareConfig {
+            tables: vec![PathBuf::from(std::ffi::OsStr::from_bytes(
+                b"targets/\xff.toml",
+            ))],
+            ..CompareConfig::default_suite()
+        };
+        assert!(matches!(study.to_toml(), Err(Error::Usage(_))));
     }
 }

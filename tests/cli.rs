@@ -693,6 +693,104 @@ fn compare_rejects_a_bad_config_before_any_work() {
     }
 }
 
+/// A compare config may leave keys out: each takes the built-in default's value. An `[[analytic]]`
+/// entry is one integrand and still needs all its keys; an unknown key is still refused.
+#[test]
+fn compare_config_fills_left_out_keys_from_the_default() {
+    let (_dir, config) = tmp("study.toml");
+    std::fs::write(&config, "ns = [16, 64]\nrealizations = 8\n").unwrap();
+    let expected = CompareConfig {
+        ns: vec![16, 64],
+        realizations: 8,
+        ..CompareConfig::default_suite()
+    };
+    assert_eq!(CompareConfig::load(&config).unwrap(), expected);
+
+    let entry = "[[analytic]]\nlabel = \"edge\"\nspec = \"sheared:s=0.5@xu\"\nshear = [0.5, 0.5]\n";
+    std::fs::write(&config, format!("{entry}shear_range = [0.5, 0.5]\n")).unwrap();
+    let study = CompareConfig::load(&config).unwrap();
+    assert_eq!(
+        study.analytic.len(),
+        1,
+        "analytic replaces the default's list"
+    );
+    assert_eq!(study.analytic[0].label, "edge");
+    assert_eq!(study.ns, CompareConfig::default_suite().ns);
+
+    for (text, needle) in [
+        (entry.to_string(), "shear_range"),
+        (
+            format!("{entry}shear_range = [0.5, 0.5]\nwidth = 2\n"),
+            "width",
+        ),
+        ("realizations = 8\nseeds = 3\n".to_string(), "seeds"),
+    ] {
+        std::fs::write(&config, &text).unwrap();
+        let err = CompareConfig::load(&config).unwrap_err();
+        assert_eq!(err.exit_code(), 2, "{text}");
+        assert!(
+            err.to_string().contains(needle),
+            "{text}: '{err}' lacks '{needle}'"
+        );
+    }
+}
+
+/// `compare --print-config` prints the study it would run as TOML that loads back to the same config,
+/// runs nothing and writes no file; with `--config` it prints the file's study, defaults filled in.
+#[test]
+fn compare_print_config_prints_the_study_as_toml() {
+    let dir = tempfile::tempdir().unwrap();
+    let print = |args: &[&str], cwd: &Path| {
+        let o = Command::new(env!("CARGO_BIN_EXE_anisospec"))
+            .args(["compare", "--print-config"])
+            .args(args)
+            .current_dir(cwd)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{args:?}: {err}");
+        assert!(err.is_empty(), "{args:?} wrote to stderr: {err}");
+        toml::from_str::<CompareConfig>(&String::from_utf8(o.stdout).unwrap()).unwrap()
+    };
+    assert_eq!(print(&[], dir.path()), CompareConfig::default_suite());
+    assert_eq!(print(&["--full"], dir.path()), CompareConfig::full_suite());
+    assert_eq!(
+        print(&["--seed", "7"], dir.path()),
+        CompareConfig {
+            seed: 7,
+            ..CompareConfig::default_suite()
+        }
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "a file was written"
+    );
+
+    // A partial file, read where its default table targets are found (the crate's root).
+    let config = dir.path().join("study.toml");
+    std::fs::write(&config, "ns = [16, 64]\nrealizations = 8\n").unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    assert_eq!(
+        print(&["--config", config.to_str().unwrap()], root),
+        CompareConfig {
+            ns: vec![16, 64],
+            realizations: 8,
+            ..CompareConfig::default_suite()
+        }
+    );
+
+    // Nothing is written, so --out and --cache would be ignored: refused.
+    let out = dir.path().join("report");
+    for flag in ["--out", "--cache"] {
+        rejects(
+            &["compare", "--print-config", flag, out.to_str().unwrap()],
+            "--print-config",
+            &out,
+        );
+    }
+}
+
 /// Numbers and names in a compare config that would fail late, panic, write a number that is not one,
 /// or overwrite one output with another are refused up front: exit 2, a message naming the config key
 /// (not a command-line flag), and no report folder.

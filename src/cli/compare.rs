@@ -8,13 +8,20 @@ use std::path::PathBuf;
 /// Compare optimized, sheared and classical samplers on analytic integrands and renderer pixels.
 #[derive(Debug, clap::Args)]
 pub struct CompareArgs {
-    /// A TOML study (keys as in the built-in default; see src/compare/config.rs). Without it the built-in
-    /// default suite runs: a few minutes on 2 cores.
+    /// A TOML study (keys as in the built-in default; see src/compare/config.rs). Every key is
+    /// optional: one left out takes the built-in default's value (see --print-config); an unknown key is
+    /// refused. Without it the built-in default suite runs: a few minutes on 2 cores.
     #[arg(long, conflicts_with = "full")]
     pub config: Option<PathBuf>,
     /// Run the paper-scale preset instead of the default (N up to 4096, 1000 realizations; hours).
     #[arg(long)]
     pub full: bool,
+    /// Print the study as TOML on stdout and run nothing (no report, no cache, so --out and --cache are
+    /// refused with it): the built-in default, with --full the paper-scale preset, with --config FILE
+    /// that file's study with every key it leaves out filled in from the default; --seed sets its
+    /// seed. Save it, edit it, and run it with --config.
+    #[arg(long, conflicts_with_all = ["out", "cache"])]
+    pub print_config: bool,
     /// Report folder: report.md, plots/, spectra/, CSV and npy. A new report replaces an earlier one
     /// there (its PNG, CSV and npy files go; other files stay); a folder of other files is refused, and
     /// so is a --cache inside it.
@@ -38,6 +45,10 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     };
     if let Some(seed) = args.seed {
         config.seed = seed;
+    }
+    if args.print_config {
+        print!("{}", config.to_toml()?);
+        return Ok(());
     }
     let cache = args
         .cache

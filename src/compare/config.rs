@@ -1,5 +1,6 @@
 //! What `anisospec compare` runs: samplers, integrands, sizes and realizations. Built-in presets
-//! (a small default and a paper-scale `--full`) or a strict TOML file.
+//! (a small default and a paper-scale `--full`) or a strict TOML file, in which every key is optional
+//! (a key left out takes the default suite's value) and an unknown key is refused.
 
 use crate::error::{Error, Result};
 use crate::points::shear::{ShearMode, MAX_SHEAR};
@@ -31,8 +32,14 @@ pub struct AnalyticEntry {
 }
 
 /// The whole study.
+///
+/// In a TOML file every key is optional: a key left out takes its value in
+/// [`CompareConfig::default_suite`] (so `ns = [16, 64]` alone is the default study at two sizes). A
+/// key given replaces the default's whole value; `analytic`, for one, replaces the default's
+/// integrands rather than adding to them, and each of its entries needs all four keys. An unknown
+/// (say, misspelt) key is refused.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default = "CompareConfig::default_suite")]
 pub struct CompareConfig {
     /// Points per pixel / estimate.
     pub ns: Vec<usize>,
@@ -156,7 +163,8 @@ impl CompareConfig {
         }
     }
 
-    /// Reads a TOML config; unknown keys, missing keys and bad values are input errors.
+    /// Reads a TOML config. A key left out takes the default suite's value; unknown keys and bad
+    /// values are input errors.
     pub fn load(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::read_input(path, e))?;
         let config: Self =
@@ -166,6 +174,14 @@ impl CompareConfig {
             other => other,
         })?;
         Ok(config)
+    }
+
+    /// The study as TOML text that [`CompareConfig::load`] reads back to the same config, every key
+    /// written out. Fails only on a table path that is not UTF-8, which TOML cannot hold (a config
+    /// read from TOML has none).
+    pub fn to_toml(&self) -> Result<String> {
+        toml::to_string(self)
+            .map_err(|e| Error::Usage(format!("the study cannot be written as TOML: {e}")))
     }
 
     /// Checks, before any work, everything in the config that would otherwise fail mid-run, put a
@@ -455,4 +471,51 @@ pub fn check_file_names(labels: &[String], what: &str) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Writes `text` to a temporary `study.toml` and loads it.
+    fn load_text(text: &str) -> Result<CompareConfig> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("study.toml");
+        std::fs::write(&path, text).unwrap();
+        CompareConfig::load(&path)
+    }
+
+    #[test]
+    fn printed_configs_load_back_unchanged() {
+        let largest_seed = CompareConfig {
+            seed: u64::MAX,
+            ..CompareConfig::default_suite()
+        };
+        for preset in [
+            CompareConfig::default_suite(),
+            CompareConfig::full_suite(),
+            largest_seed,
+        ] {
+            let text = preset.to_toml().unwrap();
+            assert_eq!(load_text(&text).unwrap(), preset, "{text}");
+        }
+    }
+
+    #[test]
+    fn an_empty_file_is_the_default_suite() {
+        assert_eq!(load_text("").unwrap(), CompareConfig::default_suite());
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_table_path_that_is_not_utf8_is_a_usage_error() {
+        use std::os::unix::ffi::OsStrExt;
+        let study = CompareConfig {
+            tables: vec![PathBuf::from(std::ffi::OsStr::from_bytes(
+                b"targets/\xff.toml",
+            ))],
+            ..CompareConfig::default_suite()
+        };
+        assert!(matches!(study.to_toml(), Err(Error::Usage(_))));
+    }
 }

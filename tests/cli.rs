@@ -1770,3 +1770,92 @@ fn converge_prints_no_chi2_without_degrees_of_freedom() {
         );
     }
 }
+
+/// variance warns on stderr at every N whose white-noise tail is more than
+/// `TAIL_WARNING_SHARE` of the prediction, judged from the tail and variance columns the command
+/// prints: N-rooks on an aligned step at N = 256 with K = 128 is dominated by its tail, and not once the
+/// grid grows with N (`--res-per-n 4`), which the warning names.
+#[test]
+fn variance_warns_when_the_tail_dominates() {
+    use anisospec::cli::variance::TAIL_WARNING_SHARE;
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "variance",
+            "--sampler",
+            "nrooks",
+            "--integrand",
+            "step:theta=0",
+            "-n",
+            "16,256",
+            "--realizations",
+            "20",
+        ];
+        args.extend_from_slice(extra);
+        let o = anisospec(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let out = String::from_utf8_lossy(&o.stdout).into_owned();
+        // Rows of the table: N, variance, stderr, tail, cone shares.
+        let shares: Vec<(usize, f64)> = out
+            .lines()
+            .filter_map(|l| {
+                let t: Vec<&str> = l.split_whitespace().collect();
+                let n = t.first()?.parse().ok()?;
+                let variance: f64 = t.get(1)?.parse().ok()?;
+                let tail: f64 = t.get(3)?.parse().ok()?;
+                Some((n, tail / variance))
+            })
+            .collect();
+        assert_eq!(shares.len(), 2, "{out}");
+        (shares, String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let mut dominated_somewhere = false;
+    let mut dominated_nowhere = false;
+    for extra in [&[][..], &["--res-per-n", "4"][..]] {
+        let (shares, err) = run(extra);
+        let over: Vec<usize> = shares
+            .iter()
+            .filter(|s| s.1 > TAIL_WARNING_SHARE)
+            .map(|s| s.0)
+            .collect();
+        dominated_somewhere |= !over.is_empty();
+        dominated_nowhere |= over.is_empty();
+        assert_eq!(
+            err.contains("warning: the white-noise tail"),
+            !over.is_empty(),
+            "{extra:?}: shares {shares:?}, stderr '{err}'"
+        );
+        for (n, share) in &shares {
+            let named = format!("N = {n} (tail ");
+            let printed = err.split(&named).nth(1).map(|rest| {
+                rest.split(' ')
+                    .next()
+                    .and_then(|v| v.parse::<f64>().ok())
+                    .unwrap_or_else(|| panic!("no share after '{named}' in '{err}'"))
+            });
+            assert_eq!(
+                printed.is_some(),
+                *share > TAIL_WARNING_SHARE,
+                "{extra:?}: '{named}' in '{err}'"
+            );
+            // The warning rounds the share to a whole percent; the table's tail (4 digits) and variance
+            // (5 digits) put at most 6e-4 of relative error on the share computed here.
+            if let Some(pct) = printed {
+                let tol = 0.5 + 6e-4 * 100.0 * share;
+                assert!(
+                    (pct - 100.0 * share).abs() <= tol,
+                    "{extra:?}: warning says {pct} %, the table {:.2} %",
+                    100.0 * share
+                );
+            }
+        }
+        if !over.is_empty() {
+            for needed in ["P = 1", "--res-per-n", "--res "] {
+                assert!(err.contains(needed), "'{err}' lacks '{needed}'");
+            }
+        }
+    }
+    assert!(
+        dominated_somewhere && dominated_nowhere,
+        "the two cases no longer straddle the threshold"
+    );
+}

@@ -6,7 +6,7 @@ use super::tables::{moved, start_sampler, table_frame, TableCache, TABLE_ITERATI
 use super::{instantiate, usable_n, Outcome, Robustness, SamplerSpec, Study, SubjectInfo};
 use crate::converge::{plot, Convergence};
 use crate::error::Result;
-use crate::output::plot::{write_loglog_png, LegendCorner, LogLogPlot, Series, XScale};
+use crate::output::plot::{write_loglog_png, LogLogPlot, Series, XScale};
 use crate::output::sheet::{write_sheet, Panel};
 use crate::output::{write_atomic, write_npy};
 use crate::points::Projection;
@@ -265,7 +265,6 @@ fn write_speed_plot(
             series,
             width: 1000,
             height: 700,
-            legend: LegendCorner::UpperRight,
             x_scale: XScale::Log,
         },
     )
@@ -829,7 +828,6 @@ fn write_robustness_plot(path: &Path, outcome: &Outcome, label: &str) -> Result<
             series,
             width: 1000,
             height: 700,
-            legend: LegendCorner::LowerLeft,
             x_scale: XScale::Linear,
         },
     )?;

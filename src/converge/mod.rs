@@ -261,7 +261,7 @@ fn csv_field(s: &str) -> String {
 /// The log-log plot of studies: MSE against N with ±1 standard error bars, one line per sampler,
 /// slopes (with 95% intervals) in the legend.
 pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Result<()> {
-    use crate::output::plot::{write_loglog_png, LegendCorner, LogLogPlot, Series, XScale};
+    use crate::output::plot::{write_loglog_png, LogLogPlot, Series, XScale};
     let series: Vec<Series> = studies
         .iter()
         .map(|s| Series {
@@ -287,7 +287,6 @@ pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Res
             series,
             width: 1000,
             height: 700,
-            legend: LegendCorner::LowerLeft,
             x_scale: XScale::Log,
         },
     )

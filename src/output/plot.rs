@@ -1,11 +1,12 @@
 //! Line plots with a log vertical axis written as PNG (log-log, or linear-log for a signed horizontal
 //! quantity): several series, each with a label and optional error bars, axis labels, a title and a
-//! legend. Text is drawn with DejaVu Sans embedded in the binary (plotters'
+//! legend in a column right of the axes, where it covers no data. Text is drawn with DejaVu Sans embedded in the binary (plotters'
 //! `ab_glyph` backend), so no system font is needed.
 
 use crate::error::{Error, Result};
 use plotters::coord::ranged1d::ValueFormatter;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
 use std::sync::Once;
 
@@ -23,15 +24,6 @@ pub struct Series {
     /// Index into [`PALETTE`] (`None`: the series' own position in the plot), so that two series can
     /// share a colour.
     pub colour: Option<usize>,
-}
-
-/// Where the legend sits inside the axes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LegendCorner {
-    /// Bottom left (curves that fall from the top left, such as MSE against N).
-    LowerLeft,
-    /// Top right (where MSE against time leaves room: fast samplers sit left, good ones low).
-    UpperRight,
 }
 
 /// Twelve colours that stay apart from one another (Tableau 10, then black and dark gold), used in
@@ -71,12 +63,11 @@ pub struct LogLogPlot {
     pub y_label: String,
     /// The lines, drawn in order, coloured from a fixed palette.
     pub series: Vec<Series>,
-    /// Image width, pixels.
+    /// Width of the axes with their labels, pixels: the image is wider by the legend's column (as wide
+    /// as its longest label), or columns when its entries do not fit the height.
     pub width: u32,
     /// Image height, pixels.
     pub height: u32,
-    /// Where the legend goes.
-    pub legend: LegendCorner,
     /// How the horizontal axis is scaled.
     pub x_scale: XScale,
 }
@@ -97,6 +88,69 @@ pub fn register_font() {
 
 fn plot_error(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::Numerical(format!("cannot draw the plot {}: {e}", path.display()))
+}
+
+/// Margin around the axes, pixels.
+const MARGIN: u32 = 12;
+/// Height of the horizontal axis's label area, pixels.
+const X_LABEL_AREA: u32 = 45;
+/// Width of the vertical axis's label area, pixels.
+const Y_LABEL_AREA: u32 = 80;
+/// Height of the title's band above the axes (22 px text and its padding), pixels.
+const TITLE_BAND: u32 = 40;
+/// Height of one legend entry (14 px text), pixels.
+const LEGEND_ROW: u32 = 20;
+/// Length of a legend entry's line sample, pixels; the text starts [`MARGIN`] after it.
+const SWATCH: u32 = 24;
+
+/// The legend's place right of the axes: entries top down from the axes' top edge, in as many columns
+/// as the plot's height needs.
+struct LegendLayout {
+    /// Entries per column.
+    rows: usize,
+    /// Columns.
+    columns: u32,
+    /// Width of one column (sample, text and margins), pixels.
+    column_width: u32,
+}
+
+impl LegendLayout {
+    fn new(plot: &LogLogPlot) -> std::result::Result<Self, String> {
+        let font = ("sans-serif", 14).into_font();
+        let mut text = 0;
+        for s in &plot.series {
+            let (w, _) = font.box_size(&s.label).map_err(|e| format!("{e:?}"))?;
+            text = text.max(w);
+        }
+        let room = plot
+            .height
+            .saturating_sub(TITLE_BAND + 2 * MARGIN + X_LABEL_AREA);
+        let rows = (room / LEGEND_ROW).max(1) as usize;
+        Ok(LegendLayout {
+            rows,
+            columns: plot.series.len().div_ceil(rows) as u32,
+            column_width: SWATCH + text + 2 * MARGIN,
+        })
+    }
+
+    /// Width of all the columns, pixels.
+    fn width(&self) -> u32 {
+        self.columns * self.column_width
+    }
+}
+
+/// A series' colour, and the style of its markers: the palette in order, then round again with hollow
+/// markers.
+fn series_style(s: &Series, index: usize) -> (RGBAColor, ShapeStyle) {
+    let slot = s.colour.unwrap_or(index);
+    let (r, g, b) = PALETTE[slot % PALETTE.len()];
+    let colour = RGBColor(r, g, b).to_rgba();
+    let marker = if (slot / PALETTE.len()).is_multiple_of(2) {
+        colour.filled()
+    } else {
+        colour.stroke_width(2)
+    };
+    (colour, marker)
 }
 
 /// The axis range `[lo, hi]` padded by a fraction of a decade on each side, and widened to the
@@ -310,22 +364,35 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
             path.display()
         )));
     };
-    let (w, h) = (plot.width as usize, plot.height as usize);
+    let legend = LegendLayout::new(plot).map_err(|e| plot_error(path, e))?;
+    let image_width = plot.width + legend.width();
+    let (w, h) = (image_width as usize, plot.height as usize);
     let mut buffer = vec![0u8; w * h * 3];
     {
         let root =
-            BitMapBackend::with_buffer(&mut buffer, (plot.width, plot.height)).into_drawing_area();
+            BitMapBackend::with_buffer(&mut buffer, (image_width, plot.height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_error(path, e))?;
-        let mut builder = ChartBuilder::on(&root);
+        // The title spans the axes and the legend, 5 px below the top edge (with plotters' 5 px of
+        // padding either side of the 22 px text, a band of about TITLE_BAND); the rest is split
+        // between the axes and the legend.
+        let body = root
+            .margin(5, 0, 0, 0)
+            .titled(&short_numbers(&plot.title), ("sans-serif", 22))
+            .map_err(|e| plot_error(path, e))?;
+        let (axes, key) = body.split_horizontally(plot.width);
+        let mut builder = ChartBuilder::on(&axes);
         builder
-            .caption(short_numbers(&plot.title), ("sans-serif", 22))
-            .margin(12)
-            .x_label_area_size(45)
-            .y_label_area_size(80);
+            .margin(MARGIN)
+            .x_label_area_size(X_LABEL_AREA)
+            .y_label_area_size(Y_LABEL_AREA);
         let y_axis = (y0..y1).log_scale();
         if x_log {
-            // The plot's own width less the margins and the vertical axis's label area.
-            let ticks = log_ticks(x0, x1, plot.width as f64 - 2.0 * 12.0 - 80.0);
+            // The axes' own width less the margins and the vertical axis's label area.
+            let ticks = log_ticks(
+                x0,
+                x1,
+                f64::from(plot.width) - f64::from(2 * MARGIN + Y_LABEL_AREA),
+            );
             let minor: Vec<f64> = ((x0.log10().floor() as i32)..=(x1.log10().ceil() as i32))
                 .flat_map(|d| (1..10).map(move |m| m as f64 * 10f64.powi(d)))
                 .filter(|v| x0 <= *v && *v <= x1)
@@ -344,12 +411,49 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
                 .map_err(|e| plot_error(path, e))?;
             draw(chart, plot, path, y0, keep, &|v| format!("{v}"))?;
         }
+        draw_legend(&key, plot, &legend).map_err(|e| plot_error(path, e))?;
         root.present().map_err(|e| plot_error(path, e))?;
     }
     super::image::write_png(path, w, h, 3, &buffer)
 }
 
-/// Draws the mesh, the series and the legend of `plot` on `chart`, whatever its horizontal scale, with
+/// Draws the legend of `plot` on `area`, the band right of the axes: one entry per series, its line
+/// sample (dashed, or solid with its marker) and its label, from the axes' top edge down.
+fn draw_legend<'a>(
+    area: &DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>,
+    plot: &LogLogPlot,
+    layout: &LegendLayout,
+) -> std::result::Result<(), DrawingAreaErrorKind<<BitMapBackend<'a> as DrawingBackend>::ErrorType>>
+{
+    let text = ("sans-serif", 14)
+        .into_font()
+        .color(&BLACK)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    let (row, swatch) = (LEGEND_ROW as i32, SWATCH as i32);
+    for (i, s) in plot.series.iter().enumerate() {
+        let (colour, marker) = series_style(s, i);
+        let x = (i / layout.rows) as i32 * layout.column_width as i32 + MARGIN as i32 / 2;
+        let y = MARGIN as i32 + (i % layout.rows) as i32 * row + row / 2;
+        let line = colour.stroke_width(2);
+        if s.dashed {
+            // The plot's dashes: 8 px drawn, 6 px left out.
+            for a in (0..swatch).step_by(14) {
+                area.draw(&PathElement::new(vec![(x + a, y), (x + a + 8, y)], line))?;
+            }
+        } else {
+            area.draw(&PathElement::new(vec![(x, y), (x + swatch, y)], line))?;
+            area.draw(&Circle::new((x + swatch / 2, y), 4, marker))?;
+        }
+        area.draw(&Text::new(
+            s.label.clone(),
+            (x + swatch + MARGIN as i32 / 2, y),
+            text.clone(),
+        ))?;
+    }
+    Ok(())
+}
+
+/// Draws the mesh and the series of `plot` on `chart`, whatever its horizontal scale, with
 /// `x_label` writing the horizontal axis's labels; `y0` is the bottom of the vertical axis (where an
 /// error bar that would cross 0 ends).
 fn draw<'a, X>(
@@ -374,35 +478,17 @@ where
         .draw()
         .map_err(|e| plot_error(path, e))?;
     for (i, s) in plot.series.iter().enumerate() {
-        let slot = s.colour.unwrap_or(i);
-        let (r, g, b) = PALETTE[slot % PALETTE.len()];
-        let colour = RGBColor(r, g, b).to_rgba();
-        // Past the palette, colours come round again with hollow markers.
-        let marker = if (slot / PALETTE.len()).is_multiple_of(2) {
-            colour.filled()
-        } else {
-            colour.stroke_width(2)
-        };
+        let (colour, marker) = series_style(s, i);
         let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| keep(p)).collect();
         let style = colour.stroke_width(2);
         if s.dashed {
             chart
                 .draw_series(DashedLineSeries::new(pts.clone(), 8, 6, style))
-                .map_err(|e| plot_error(path, e))?
-                .label(&s.label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-                });
+                .map_err(|e| plot_error(path, e))?;
         } else {
             chart
                 .draw_series(LineSeries::new(pts.clone(), style))
-                .map_err(|e| plot_error(path, e))?
-                .label(&s.label)
-                .legend(move |(x, y)| {
-                    EmptyElement::at((x, y))
-                        + PathElement::new(vec![(0, 0), (20, 0)], colour.stroke_width(2))
-                        + Circle::new((10, 0), 4, marker)
-                });
+                .map_err(|e| plot_error(path, e))?;
             chart
                 .draw_series(pts.iter().map(|&p| Circle::new(p, 4, marker)))
                 .map_err(|e| plot_error(path, e))?;
@@ -420,17 +506,6 @@ where
             chart.draw_series(bars).map_err(|e| plot_error(path, e))?;
         }
     }
-    chart
-        .configure_series_labels()
-        .position(match plot.legend {
-            LegendCorner::LowerLeft => SeriesLabelPosition::LowerLeft,
-            LegendCorner::UpperRight => SeriesLabelPosition::UpperRight,
-        })
-        .label_font(("sans-serif", 14))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(|e| plot_error(path, e))?;
     Ok(())
 }
 
@@ -464,21 +539,20 @@ mod tests {
             ],
             width: 640,
             height: 480,
-            legend: LegendCorner::LowerLeft,
             x_scale: XScale::Log,
         };
         write_loglog_png(&path, &plot).unwrap();
-        let decoder =
-            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
-        let mut reader = decoder.read_info().unwrap();
-        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-        let info = reader.next_frame(&mut buf).unwrap();
-        assert_eq!((info.width, info.height), (640, 480));
+        let (width, height, buf) = read_rgb(&path);
+        // The axes' 640 px and the legend's column right of them, with room for
+        // (480 − 40 title − 2·12 margins − 45 axis labels) / 20 = 18 entries.
+        let legend = LegendLayout::new(&plot).unwrap();
+        assert_eq!((legend.rows, legend.columns), (18, 1));
+        assert_eq!((width, height), (640 + legend.width(), 480));
         // Not blank: many non-white pixels, and several colours (lines, text).
         let non_white = buf.chunks(3).filter(|p| p != &[255, 255, 255]).count();
         assert!(non_white > 5000, "{non_white}");
         // The title row area holds dark text pixels (the embedded font renders).
-        let dark_in_title = buf[..640 * 3 * 30]
+        let dark_in_title = buf[..width as usize * 3 * 30]
             .chunks(3)
             .filter(|p| p[0] < 100 && p[1] < 100 && p[2] < 100)
             .count();
@@ -491,6 +565,82 @@ mod tests {
             }
         )
         .is_err());
+    }
+
+    /// The PNG at `path` as `(width, height, RGB bytes)`.
+    fn read_rgb(path: &Path) -> (u32, u32, Vec<u8>) {
+        let decoder =
+            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+        let mut reader = decoder.read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        (info.width, info.height, buf)
+    }
+
+    /// The legend covers no data: below the title, the axes' pixels are the same whatever the labels
+    /// (long ones widen only the legend's column), every series' colour is in that column, and a legend
+    /// taller than the plot takes a second column.
+    #[test]
+    fn the_legend_sits_right_of_the_axes() {
+        let dir = tempfile::tempdir().unwrap();
+        let series = |label: &dyn Fn(usize) -> String, count: usize| -> Vec<Series> {
+            (0..count)
+                .map(|i| Series {
+                    label: label(i),
+                    // Falling lines through the lower left, where a legend inside the axes would sit.
+                    points: vec![
+                        (16.0, 1e-2 / (i + 1) as f64),
+                        (1024.0, 1e-7 * (i + 1) as f64),
+                    ],
+                    errors: None,
+                    dashed: i % 2 == 1,
+                    colour: None,
+                })
+                .collect()
+        };
+        let plot = |series: Vec<Series>| LogLogPlot {
+            title: "legend".into(),
+            x_label: "N".into(),
+            y_label: "MSE".into(),
+            series,
+            width: 640,
+            height: 480,
+            x_scale: XScale::Log,
+        };
+        let short = plot(series(&|i| format!("s{i}"), 6));
+        let long = plot(series(
+            &|i| format!("sampler number {i}: slope -1.98 [-2.07, -1.89]"),
+            6,
+        ));
+        let (a, b) = (dir.path().join("a.png"), dir.path().join("b.png"));
+        write_loglog_png(&a, &short).unwrap();
+        write_loglog_png(&b, &long).unwrap();
+        let ((wa, ha, pa), (wb, hb, pb)) = (read_rgb(&a), read_rgb(&b));
+        assert_eq!((ha, hb), (480, 480));
+        assert!(wb > wa && wa > 640, "{wa} {wb}");
+        let axes = |w: u32, px: &[u8]| -> Vec<u8> {
+            (TITLE_BAND as usize..480)
+                .flat_map(|y| px[y * w as usize * 3..(y * w as usize + 640) * 3].to_vec())
+                .collect()
+        };
+        assert!(
+            axes(wa, &pa) == axes(wb, &pb),
+            "the labels changed the axes"
+        );
+        for (i, s) in long.series.iter().enumerate() {
+            let (r, g, b) = PALETTE[s.colour.unwrap_or(i)];
+            let in_legend = (0..480usize)
+                .flat_map(|y| (640..wb as usize).map(move |x| (y * wb as usize + x) * 3))
+                .filter(|&o| pb[o..o + 3] == [r, g, b])
+                .count();
+            assert!(in_legend >= 8, "series {i}: {in_legend} px of its colour");
+        }
+        let tall = plot(series(&|i| format!("s{i}"), 30));
+        let layout = LegendLayout::new(&tall).unwrap();
+        assert_eq!((layout.rows, layout.columns), (18, 2));
+        let c = dir.path().join("c.png");
+        write_loglog_png(&c, &tall).unwrap();
+        assert_eq!(read_rgb(&c).0, 640 + 2 * layout.column_width);
     }
 
     /// A linear horizontal axis takes values of either sign (a log one would drop them all here).
@@ -511,7 +661,6 @@ mod tests {
             }],
             width: 320,
             height: 240,
-            legend: LegendCorner::LowerLeft,
             x_scale: XScale::Linear,
         };
         write_loglog_png(&path, &plot).unwrap();

@@ -48,6 +48,8 @@ pub struct VarianceConfig {
 pub struct VariancePoint {
     /// Points per set.
     pub n: usize,
+    /// Frequency grid side `K` used at this `N` (grows with `N` under `res_per_n`).
+    pub res: usize,
     /// Predicted variance: `grid + tail`.
     pub variance: f64,
     /// Standard error of `variance` (from the realizations; the tail is taken as exact).
@@ -61,6 +63,16 @@ pub struct VariancePoint {
     pub cones: Vec<f64>,
     /// Standard error of each cone's share.
     pub cone_stderr: Vec<f64>,
+}
+
+impl VariancePoint {
+    /// The tail's share of the predicted variance (`tail / variance`, a fraction in [0, 1]); `None`
+    /// when the tail is unknown or the prediction is zero.
+    pub fn tail_share(&self) -> Option<f64> {
+        self.tail
+            .filter(|_| self.variance > 0.0)
+            .map(|t| t / self.variance)
+    }
 }
 
 /// Predictions for a list of `N`.
@@ -293,6 +305,7 @@ pub fn predict(
         let tail = var_f.map(|v| (v - spec.total).max(0.0) / n as f64);
         points.push(VariancePoint {
             n,
+            res,
             variance: grid + tail.unwrap_or(0.0),
             stderr,
             grid,

@@ -1065,6 +1065,37 @@ fn gallery_writes_every_sampler() {
     }
 }
 
+/// A scene whose camera can put a shear beyond the crate's largest on some depth (a tiny fov) is
+/// refused before any work, by `oracle` and `render --shear` alike, naming the keys.
+#[test]
+fn scenes_with_unbounded_shear_are_refused() {
+    let (dir, out) = tmp("o.npy");
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, "fov = 1e-300\n").unwrap();
+    let sc = scene.to_str().unwrap();
+    rejects(
+        &["oracle", "--scene", sc, "-o", out.to_str().unwrap()],
+        "widen fov",
+        &out,
+    );
+    assert!(!dir.path().join("o.exr").exists());
+    let img = dir.path().join("r.exr");
+    rejects(
+        &[
+            "render",
+            "--scene",
+            sc,
+            "--sampler",
+            "mj",
+            "--shear",
+            "-o",
+            img.to_str().unwrap(),
+        ],
+        "beyond the largest supported shear",
+        &img,
+    );
+}
+
 /// A variance target with `design = "lattice"`: `optimize` writes the searched lattice as every set
 /// (each coordinate at its strata's centres) and names its generating vector and predicted variance in
 /// the sidecar (a shape target with the key is refused: tests/optimize.rs, `target_files_are_strict`).

@@ -663,3 +663,81 @@ fn render_is_deterministic_across_thread_counts() {
         .install(run);
     assert_eq!(one, run());
 }
+
+/// A camera that can put a shear beyond `MAX_SHEAR` on some depth of the scene is refused before any
+/// work, naming the keys to change (a tiny fov made the oracle's EXR channels −inf); the bound the
+/// check uses holds every shear the oracle finds.
+#[test]
+fn scene_with_unbounded_shear_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("narrow.toml");
+    std::fs::write(&path, "fov = 1e-300\n").unwrap();
+    let e = Scene::load(Some(&path)).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    for key in ["fov", "aperture", "focus", "1e6"] {
+        assert!(e.to_string().contains(key), "{e}");
+    }
+    let out = dir.path().join("o.exr");
+    let args = anisospec::cli::oracle::OracleArgs {
+        scene: Some(path.clone()),
+        output: out.clone(),
+    };
+    assert_eq!(
+        anisospec::cli::oracle::run(&args).unwrap_err().exit_code(),
+        2
+    );
+    assert!(!out.exists());
+    // Subnormal and near-zero fovs, and a focus far from every depth with a wide aperture.
+    for text in [
+        "fov = 1e-320\n",
+        "fov = 1e-9\n",
+        "focus = 0.0011\naperture = 0.9\nfov = 1e-4\n",
+    ] {
+        std::fs::write(&path, text).unwrap();
+        assert!(Scene::load(Some(&path)).is_err(), "{text}");
+    }
+
+    // The bound covers every shear the oracle sees, on the default camera and on wide, near-wall and
+    // near-focus variants.
+    let configs = [
+        SceneConfig::default(),
+        SceneConfig {
+            fov: 160.0,
+            focus: 0.01,
+            aperture: 0.2,
+            ..SceneConfig::default()
+        },
+        SceneConfig {
+            position: [0.9, -0.9, 1.0],
+            fov: 120.0,
+            aperture: 0.15,
+            ..SceneConfig::default()
+        },
+        SceneConfig {
+            position: [-0.3, -0.5, 1.5],
+            fov: 90.0,
+            focus: 0.002,
+            ..SceneConfig::default()
+        },
+    ];
+    for c in configs {
+        let c = SceneConfig {
+            width: 8,
+            height: 6,
+            ..c
+        };
+        let bound = c.shear_bound();
+        assert!(bound.is_finite() && bound > 0.0, "{c:?}: {bound}");
+        let sc = Scene::new(c.clone()).unwrap();
+        let seen = oracle_image(&sc)
+            .unwrap()
+            .iter()
+            .map(|o| o.s_min.abs().max(o.s_max.abs()))
+            .fold(0.0, f64::max);
+        assert!(
+            seen <= bound * (1.0 + 1e-9),
+            "{c:?}: seen {seen} > bound {bound}"
+        );
+        assert!(seen > 0.0);
+    }
+}

@@ -8,6 +8,7 @@
 
 use super::camera::Camera;
 use crate::error::{Error, Result};
+use crate::points::shear::MAX_SHEAR;
 use glam::DVec3;
 use std::path::Path;
 
@@ -171,7 +172,49 @@ impl SceneConfig {
                 self.position, self.aperture
             ));
         }
+        let bound = self.shear_bound();
+        if !(bound <= MAX_SHEAR) {
+            return Err(format!(
+                "this camera (fov = {}, aperture = {}, focus = {}, height = {}, position = {:?}) can put a \
+                 shear of magnitude up to {bound:.3e} pixels per lens width on a pixel, beyond the largest \
+                 supported shear {MAX_SHEAR:e}; widen fov, make aperture smaller, move focus towards the \
+                 scene's depths, or move position away from the walls and boxes (the defaults are fov = 33.4, aperture = 0.04, focus = 3)",
+                self.fov, self.aperture, self.focus, self.height, self.position
+            ));
+        }
         Ok(())
+    }
+
+    /// An upper bound on `|s|` over every depth the camera can see, for [`Camera::shear`]'s
+    /// `s = A (F − d)/(F d) × H/(2 tan(fov/2))`: `|1/d − 1/F|` is largest at an end of the depth range,
+    /// and every visible depth lies between a lower bound `d_lo` (the lateral gap from the lens to each
+    /// wall and box over the steepest ray slope, or a box's front face) and the back wall. Infinite if
+    /// a surface can come arbitrarily close to the lens; 0 for a pinhole. Call on a configuration whose
+    /// other values are in range.
+    pub fn shear_bound(&self) -> f64 {
+        if self.aperture == 0.0 {
+            return 0.0;
+        }
+        let tan_y = (self.fov.to_radians() / 2.0).tan();
+        let tan_x = tan_y * self.width as f64 / self.height as f64;
+        let scale = self.aperture * self.height as f64 / (2.0 * tan_y);
+        let h = self.aperture / 2.0;
+        let p = DVec3::from_array(self.position);
+        // Steepest lateral slope of a ray (per unit of depth): pixel slope plus lens offset / focus.
+        let slope = [tan_x + h / self.focus, tan_y + h / self.focus];
+        let reach = |gap: f64, axis: usize| gap.max(0.0) / slope[axis];
+        // Side walls, floor and ceiling.
+        let mut d_lo = (0..2)
+            .map(|a| reach((ROOM_MAX[a] - p[a]).min(p[a] - ROOM_MIN[a]) - h, a))
+            .fold(ROOM_MAX.z - p.z, f64::min);
+        for b in BOXES.iter().filter(|b| b.max.z > p.z) {
+            let gap = |a: usize| (b.min[a] - (p[a] + h)).max((p[a] - h) - b.max[a]);
+            let d = (b.min.z - p.z).max(reach(gap(0), 0)).max(reach(gap(1), 1));
+            d_lo = d_lo.min(d);
+        }
+        let d_hi = ROOM_MAX.z - p.z;
+        let inv_f = 1.0 / self.focus;
+        scale * (1.0 / d_lo - inv_f).abs().max((1.0 / d_hi - inv_f).abs())
     }
 
     /// A stable text key for caches: the configuration as JSON.

@@ -100,11 +100,10 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
             let (slope, lo, hi) =
                 s.fit
                     .map_or((String::new(), String::new(), String::new()), |f| {
-                        (
-                            f.slope.to_string(),
-                            f.ci95.0.to_string(),
-                            f.ci95.1.to_string(),
-                        )
+                        let (lo, hi) = f.interval().map_or((String::new(), String::new()), |i| {
+                            (i.0.to_string(), i.1.to_string())
+                        });
+                        (f.slope.to_string(), lo, hi)
                     });
             for (p, setup) in s.points.iter().zip(&s.setup_seconds) {
                 writeln!(
@@ -164,7 +163,7 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
 
 fn slope_text(s: &Study) -> String {
     s.fit.map_or("no fit".into(), |f| {
-        format!("{:.2} [{:.2}, {:.2}]", f.slope, f.ci95.0, f.ci95.1)
+        format!("{:.2} {}", f.slope, f.interval_text(2))
     })
 }
 

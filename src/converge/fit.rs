@@ -16,11 +16,43 @@ pub struct SlopeFit {
     pub ci95: (f64, f64),
     /// `χ² / dof` of the fit (NaN-free: 0 with two points).
     pub chi2_per_dof: f64,
+    /// False when some point's standard error is 0 or below [`MIN_RELATIVE_ERROR`] of its value (a
+    /// chance agreement of few realizations, not a point known exactly): its weight would be infinite,
+    /// so the slope is fitted with equal weights and `stderr`, `ci95` and `chi2_per_dof` mean nothing
+    /// (they are set to 0, the interval to zero width). Read them through [`SlopeFit::interval`] and
+    /// [`SlopeFit::chi2`], which say so, and show "—".
+    pub errors_defined: bool,
+}
+
+/// The smallest relative standard error `se / y` a point's weight is taken from; below it (0 included)
+/// the fit's interval and `χ²` are undefined.
+pub const MIN_RELATIVE_ERROR: f64 = 1e-9;
+
+impl SlopeFit {
+    /// The 95% interval of the slope, or `None` when the points' errors do not define one.
+    pub fn interval(&self) -> Option<(f64, f64)> {
+        self.errors_defined.then_some(self.ci95)
+    }
+
+    /// `χ² / dof`, or `None` when it is undefined: no degree of freedom (two points) or points'
+    /// errors that define no weights.
+    pub fn chi2(&self, points: usize) -> Option<f64> {
+        (self.errors_defined && points > 2).then_some(self.chi2_per_dof)
+    }
+
+    /// The interval as `[lo, hi]` with `decimals` digits, or `[—]` when it is undefined.
+    pub fn interval_text(&self, decimals: usize) -> String {
+        match self.interval() {
+            Some((lo, hi)) => format!("[{lo:.decimals$}, {hi:.decimals$}]"),
+            None => "[—]".into(),
+        }
+    }
 }
 
 /// Fits `y ∝ N^slope` to values `y` with standard errors `se`, weighting `ln y` by `(y / se)²`
-/// (delta method). Needs at least two distinct positive `N` and positive finite `y`; a zero standard
-/// error is replaced by `1e-12 y` (a point known exactly).
+/// (delta method). Needs at least two distinct positive `N` and positive finite `y`. A standard error
+/// of 0 (or under [`MIN_RELATIVE_ERROR`] of its value) defines no weight: the slope is then fitted with
+/// equal weights and its interval and `χ²` are undefined ([`SlopeFit::errors_defined`] is false).
 pub fn fit_power_law(n: &[f64], y: &[f64], se: &[f64]) -> Result<SlopeFit> {
     if n.len() != y.len() || n.len() != se.len() || n.len() < 2 {
         return Err(Error::Usage(
@@ -37,12 +69,17 @@ pub fn fit_power_law(n: &[f64], y: &[f64], se: &[f64]) -> Result<SlopeFit> {
     }
     let x: Vec<f64> = n.iter().map(|v| v.ln()).collect();
     let ly: Vec<f64> = y.iter().map(|v| v.ln()).collect();
+    let errors_defined = y.iter().zip(se).all(|(y, s)| s / y >= MIN_RELATIVE_ERROR);
     let w: Vec<f64> = y
         .iter()
         .zip(se)
         .map(|(y, s)| {
-            let rel = (s / y).max(1e-12);
-            1.0 / (rel * rel)
+            if errors_defined {
+                let rel = s / y;
+                1.0 / (rel * rel)
+            } else {
+                1.0
+            }
         })
         .collect();
     let sw: f64 = w.iter().sum();
@@ -65,14 +102,22 @@ pub fn fit_power_law(n: &[f64], y: &[f64], se: &[f64]) -> Result<SlopeFit> {
         .map(|i| w[i] * (ly[i] - intercept - slope * x[i]).powi(2))
         .sum();
     let dof = x.len() as f64 - 2.0;
-    let chi2_per_dof = if dof > 0.0 { chi2 / dof } else { 0.0 };
-    let stderr = (1.0 / sxx).sqrt() * chi2_per_dof.max(1.0).sqrt();
+    let (chi2_per_dof, stderr) = if errors_defined {
+        let chi2_per_dof = if dof > 0.0 { chi2 / dof } else { 0.0 };
+        (
+            chi2_per_dof,
+            (1.0 / sxx).sqrt() * chi2_per_dof.max(1.0).sqrt(),
+        )
+    } else {
+        (0.0, 0.0)
+    };
     Ok(SlopeFit {
         slope,
         stderr,
         intercept,
         ci95: (slope - 1.96 * stderr, slope + 1.96 * stderr),
         chi2_per_dof,
+        errors_defined,
     })
 }
 
@@ -93,6 +138,33 @@ mod tests {
         let m = x.iter().sum::<f64>() / 4.0;
         let want = 0.1 / x.iter().map(|x| (x - m).powi(2)).sum::<f64>().sqrt();
         assert!((f.stderr - want).abs() < 1e-12);
+    }
+
+    /// A standard error of 0 (two realizations that agree by chance) gives no weight: the slope is
+    /// still fitted, but the interval and chi2 are undefined, not zero-width or astronomically large.
+    #[test]
+    fn a_zero_standard_error_leaves_the_interval_undefined() {
+        let n = [1.0, 4.0, 16.0];
+        let y = [0.1, 0.01, 2e-3];
+        let f = fit_power_law(&n[..2], &y[..2], &[0.0, 0.0]).unwrap();
+        assert!((f.slope - 0.1f64.ln() / 4f64.ln()).abs() < 1e-12);
+        assert!(!f.errors_defined);
+        assert_eq!(f.interval(), None);
+        assert_eq!(f.chi2(2), None);
+        assert_eq!(f.interval_text(3), "[—]");
+        let f = fit_power_law(&n, &y, &[0.0, 1e-3, 1e-4]).unwrap();
+        assert!(!f.errors_defined && f.interval().is_none() && f.chi2(3).is_none());
+        assert!(f.slope.is_finite() && f.chi2_per_dof == 0.0 && f.stderr == 0.0);
+        // A relative error far below any realizations' count can give is no weight either.
+        let f = fit_power_law(&n, &y, &[1e-13, 1e-3, 1e-4]).unwrap();
+        assert!(f.interval().is_none());
+        // Honest errors define both.
+        let f = fit_power_law(&n, &y, &[1e-2, 1e-3, 1e-4]).unwrap();
+        assert!(f.errors_defined);
+        let (lo, hi) = f.interval().unwrap();
+        assert!(lo < f.slope && f.slope < hi);
+        assert!(f.chi2(3).is_some_and(f64::is_finite));
+        assert_eq!(f.chi2(2), None);
     }
 
     #[test]

@@ -215,18 +215,23 @@ const CSV_HEADER: &[&str] = &[
 ];
 
 /// Writes studies as CSV (atomically): the columns of `CSV_HEADER`; the slope columns repeat the
-/// sampler's fit on each of its rows (empty when there is no fit).
+/// sampler's fit on each of its rows (empty when there is no fit; the interval columns are empty
+/// when the interval is undefined).
 pub fn write_csv(path: &std::path::Path, studies: &[Convergence]) -> Result<()> {
     use std::io::Write;
     crate::output::write_atomic(path, |w| {
         writeln!(w, "{}", CSV_HEADER.join(","))?;
         for s in studies {
+            // An undefined interval (a standard error of 0) leaves its columns empty.
             let (slope, lo, hi) = match &s.fit {
-                Some(f) => (
-                    f.slope.to_string(),
-                    f.ci95.0.to_string(),
-                    f.ci95.1.to_string(),
-                ),
+                Some(f) => {
+                    let (lo, hi) = f
+                        .interval()
+                        .map_or((String::new(), String::new()), |(lo, hi)| {
+                            (lo.to_string(), hi.to_string())
+                        });
+                    (f.slope.to_string(), lo, hi)
+                }
                 None => (String::new(), String::new(), String::new()),
             };
             for p in &s.points {
@@ -266,10 +271,7 @@ pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Res
         .iter()
         .map(|s| Series {
             label: match &s.fit {
-                Some(f) => format!(
-                    "{}: slope {:.2} [{:.2}, {:.2}]",
-                    s.sampler, f.slope, f.ci95.0, f.ci95.1
-                ),
+                Some(f) => format!("{}: slope {:.2} {}", s.sampler, f.slope, f.interval_text(2)),
                 None => s.sampler.clone(),
             },
             points: s.points.iter().map(|p| (p.n as f64, p.mse)).collect(),

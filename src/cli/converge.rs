@@ -102,6 +102,11 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         match &s.fit {
             // Through two N the line fits exactly: no degree of freedom is left to measure the scatter
             // (chi2/dof), and the interval holds only the two points' own errors, not a curvature.
+            // A standard error of 0 (realizations that agree by chance) defines no weight: no interval.
+            Some(fit) if fit.interval().is_none() => println!(
+                "{}: slope {:.3} (95% CI —, chi2/dof —: a standard error of 0 gives no interval; raise --realizations)",
+                s.sampler, fit.slope
+            ),
             Some(fit) if s.points.len() == 2 => println!(
                 "{}: slope {:.3} (95% CI {:.3} .. {:.3} from the two points' errors alone, chi2/dof —: give three or more N to test the fit)",
                 s.sampler, fit.slope, fit.ci95.0, fit.ci95.1

@@ -1065,6 +1065,27 @@ fn gallery_writes_every_sampler() {
     }
 }
 
+/// `gallery --out` on a file (or under one) is a usage error naming the flag, before any work.
+#[test]
+fn gallery_refuses_a_file_as_its_folder() {
+    let (dir, file) = tmp("ok.txt");
+    std::fs::write(&file, "keep").unwrap();
+    let f = file.to_str().unwrap();
+    rejects(
+        &["gallery", "--out", f, "-n", "16", "--res", "8"],
+        "is a file, not a folder",
+        &file.join("gallery"),
+    );
+    let under = file.join("sub");
+    rejects(
+        &["gallery", "--out", under.to_str().unwrap(), "--res", "8"],
+        "give --out a folder path",
+        &under,
+    );
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "keep");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}
+
 /// A scene whose camera can put a shear beyond the crate's largest on some depth (a tiny fov) is
 /// refused before any work, by `oracle` and `render --shear` alike, naming the keys.
 #[test]

@@ -64,6 +64,7 @@ pub struct GalleryArgs {
 /// Runs `anisospec gallery`.
 pub fn run(args: &GalleryArgs) -> Result<()> {
     check_res(args.res)?;
+    crate::output::check_folder(&args.out, "--out", "gallery")?;
     let method = Method::nufft(args.eps)?;
     let gallery = args.out.join("gallery");
     // The whole gallery or nothing: a failure leaves an earlier one as it was.

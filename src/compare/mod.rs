@@ -252,10 +252,10 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
 /// report, and a `cache_dir` inside `out` are refused before any work.
 pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outcome> {
     config.validate()?;
-    check_folder(out, "--out", "report")?;
+    crate::output::check_folder(out, "--out", "report")?;
     crate::output::check_report_folder(out, REPORT_FILE, "--out")?;
     check_cache_outside(cache_dir, out)?;
-    check_folder(cache_dir, "--cache", "cache")?;
+    crate::output::check_folder(cache_dir, "--cache", "cache")?;
     let started = Instant::now();
     let subjects = subjects(config, cache_dir)?;
     let labels: Vec<String> = subjects.iter().map(|s| s.label.clone()).collect();
@@ -318,24 +318,6 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
         report::write(&outcome, &specs, &tables, staging)
     })?;
     Ok(outcome)
-}
-
-/// Refuses a folder `dir` (given by `flag`, holding the `what`) that is, or lies under, an existing
-/// file, before any work: the run could not write to it.
-fn check_folder(dir: &Path, flag: &str, what: &str) -> Result<()> {
-    match crate::output::file_in_the_way(dir) {
-        Some(file) => {
-            let place = if file == dir {
-                format!("{} is a file", dir.display())
-            } else {
-                format!("{} lies under {}, a file", dir.display(), file.display())
-            };
-            Err(Error::Usage(format!(
-                "{flag} {place}, not a folder, so no {what} folder can be written there; give {flag} a folder path"
-            )))
-        }
-        None => Ok(()),
-    }
 }
 
 /// Refuses a cache folder inside the report folder `out` (or the same folder), before any work: a report

@@ -402,6 +402,24 @@ fn os_error(e: &std::io::Error) -> std::io::Error {
     std::io::Error::new(e.kind(), text.to_string())
 }
 
+/// Refuses a folder `dir` (given by `flag`, holding the `what`) that is, or lies under, an existing
+/// file, before any work: the run could not write to it.
+pub fn check_folder(dir: &Path, flag: &str, what: &str) -> Result<()> {
+    match file_in_the_way(dir) {
+        Some(file) => {
+            let place = if file == dir {
+                format!("{} is a file", dir.display())
+            } else {
+                format!("{} lies under {}, a file", dir.display(), file.display())
+            };
+            Err(Error::Usage(format!(
+                "{flag} {place}, not a folder, so no {what} folder can be written there; give {flag} a folder path"
+            )))
+        }
+        None => Ok(()),
+    }
+}
+
 /// The existing file, if any, that stands where the folder `dir` (or one of its ancestors) must go: the
 /// nearest ancestor that exists, when it is not a folder.
 pub fn file_in_the_way(dir: &Path) -> Option<&Path> {

@@ -1086,6 +1086,29 @@ fn gallery_refuses_a_file_as_its_folder() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 }
 
+/// Sampler names that are empty, a `table:` without a path, and a 4D pairing asked in 2D each get a
+/// message saying so (not "no point-set extension" or a guess at the closest 2D name).
+#[test]
+fn sampler_name_messages() {
+    let (_dir, out) = tmp("a.npy");
+    let o = out.to_str().unwrap();
+    rejects(
+        &["sample", "--sampler", "table:", "-n", "16", "-o", o],
+        "names no table",
+        &out,
+    );
+    rejects(
+        &["sample", "--sampler", "padded-nosuch", "-n", "16", "-o", o],
+        "--dims 4",
+        &out,
+    );
+    rejects(
+        &["sample", "--sampler", "", "-n", "16", "-o", o],
+        "the sampler name is empty",
+        &out,
+    );
+}
+
 /// A scene whose camera can put a shear beyond the crate's largest on some depth (a tiny fov) is
 /// refused before any work, by `oracle` and `render --shear` alike, naming the keys.
 #[test]

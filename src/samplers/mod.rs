@@ -213,6 +213,22 @@ fn edit_distance(a: &str, b: &str) -> usize {
     d[a.len() * w + b.len()]
 }
 
+/// For the 2D name inside `padded-NAME` / `xuyv-NAME`: empty if it is a 2D sampler, else a clause
+/// saying it is not one, with the closest 2D name and the list.
+fn unknown_inner(inner: &str) -> String {
+    if build_2d(inner).is_some() {
+        return String::new();
+    }
+    let closest = NAMES_2D
+        .iter()
+        .min_by_key(|n| edit_distance(inner, n))
+        .expect("names exist");
+    format!(
+        "; and '{inner}' is not a 2D sampler (did you mean '{closest}'?); 2D names: {}",
+        NAMES_2D.join(", ")
+    )
+}
+
 /// Every name valid in `dims` dimensions, families expanded.
 fn names_in(dims: usize) -> Vec<String> {
     if dims == 2 {
@@ -247,6 +263,12 @@ pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
             "--dims {dims} is not supported; samplers make 2D (x,y) or 4D (x,y,u,v) sets"
         )));
     }
+    if name.trim().is_empty() {
+        return Err(Error::Usage(
+            "the sampler name is empty; give one with --sampler NAME (`anisospec samplers` lists them)"
+                .into(),
+        ));
+    }
     if let Some(pattern) = name.strip_prefix("table:") {
         return Ok(Box::new(table::Table::load(pattern, dims)?));
     }
@@ -256,6 +278,16 @@ pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
     if dims == 2 {
         if let Some(s) = build_2d(name) {
             return Ok(s);
+        }
+        // A pairing family is 4D whatever its 2D name; say so first, then whether the name exists.
+        if let Some((prefix, inner)) = ["padded", "xuyv"]
+            .into_iter()
+            .find_map(|p| Some((p, name.strip_prefix(p)?.strip_prefix('-')?)))
+        {
+            return Err(Error::Usage(format!(
+                "sampler '{name}' makes 4D sets ({prefix}-NAME pairs two 2D sets), but 2D sets are asked here; ask for 4D (--dims 4 in sample and spectrum, a 4D integrand in variance and converge){}",
+                unknown_inner(inner)
+            )));
         }
         if names_in(4).iter().any(|n| n == name) {
             return Err(Error::Usage(format!(
@@ -281,6 +313,15 @@ pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
                 "sampler '{name}' is 2D only; in 4D use padded-{name} (xy and uv) or xuyv-{name} (xu and yv)"
             )));
         }
+        if let Some((prefix, inner)) = ["padded", "xuyv"]
+            .into_iter()
+            .find_map(|p| Some((p, name.strip_prefix(p)?.strip_prefix('-')?)))
+        {
+            return Err(Error::Usage(format!(
+                "sampler '{name}': {prefix}-NAME needs a 2D sampler NAME{}",
+                unknown_inner(inner)
+            )));
+        }
     }
     let valid = names_in(dims);
     let closest = valid
@@ -296,6 +337,39 @@ pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An empty name, an empty table path and a 4D pairing asked in 2D each get their own message.
+    #[test]
+    fn name_messages_say_what_is_wrong() {
+        let msg = |name: &str, dims: usize| {
+            let e = build(name, dims).err().expect("refused");
+            assert_eq!(e.exit_code(), 2, "{name}: {e}");
+            e.to_string()
+        };
+        for dims in [2, 4] {
+            let m = msg("", dims);
+            assert!(
+                m.contains("name is empty") && m.contains("anisospec samplers"),
+                "{m}"
+            );
+            let m = msg("table:", dims);
+            assert!(
+                m.contains("names no table") && m.contains("table:sets.npy"),
+                "{m}"
+            );
+        }
+        let m = msg("padded-nosuch", 2);
+        assert!(m.contains("4D") && m.contains("--dims 4"), "{m}");
+        assert!(m.contains("'nosuch' is not a 2D sampler"), "{m}");
+        let m = msg("xuyv-mj", 2);
+        assert!(
+            m.contains("--dims 4") && !m.contains("not a 2D sampler"),
+            "{m}"
+        );
+        let m = msg("padded-nosuch", 4);
+        assert!(m.contains("padded-NAME needs a 2D sampler"), "{m}");
+        assert!(build("padded-mj", 4).is_ok());
+    }
 
     #[test]
     fn edit_distance_counts_transpositions() {

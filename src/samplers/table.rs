@@ -101,6 +101,13 @@ impl Sampler for Table {
 /// every file of its folder that matches a pattern holding `{n}` with a whole number in its place,
 /// sorted. None is a usage error.
 pub fn files(pattern: &str) -> Result<Vec<(PathBuf, Option<usize>)>> {
+    if pattern.trim().is_empty() {
+        return Err(Error::Usage(
+            "sampler 'table:' names no table: give the point-set file after the colon, e.g. \
+             table:sets.npy, or table:dir/n{n}.npy for one file per N"
+                .into(),
+        ));
+    }
     let files = match pattern.split_once("{n}") {
         None => vec![(pattern.into(), None)],
         Some((head, tail)) => {

@@ -77,7 +77,7 @@ impl PointSets {
             if !c.is_finite() || *c < 0.0 || *c > 1.0 {
                 let (s, j, d) = (i / (n * dims), (i / dims) % n, i % dims);
                 return Err(Error::Input(format!(
-                    "coordinate {d} of point {j} in set {s} is {c}; every coordinate must be a finite number in [0, 1)"
+                    "coordinate {d} of point {j} in set {s} is {c}; every coordinate must be a finite number in [0, 1) (the unit torus; exactly 1 is taken as 0)"
                 )));
             }
             if *c == 1.0 {
@@ -265,7 +265,14 @@ mod tests {
 
     #[test]
     fn new_rejects_out_of_range_and_wraps_one() {
-        assert!(PointSets::new(1, 1, 2, vec![0.5, 1.5]).is_err());
+        let e = PointSets::new(1, 1, 2, vec![0.5, 1.5])
+            .unwrap_err()
+            .to_string();
+        // The message states the accepted 1 (taken as 0), not a bare half-open range.
+        assert!(
+            e.contains("[0, 1)") && e.contains("exactly 1 is taken as 0"),
+            "{e}"
+        );
         assert!(PointSets::new(1, 1, 2, vec![0.5, f64::NAN]).is_err());
         let p = PointSets::new(1, 1, 2, vec![1.0, 0.5]).unwrap();
         assert_eq!(p.data(), &[0.0, 0.5]);

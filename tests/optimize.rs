@@ -253,11 +253,47 @@ fn target_files_are_strict() {
             "kind = \"hairline\"\nshear = 0.5\nhalf_width = 0.1\nlength = 1\ndesign = \"lattice\"\n",
             "unknown field",
         ),
+        // Shears are capped as in the variance target; a wedge of one slope is a hairline.
+        (
+            "kind = \"hairline\"\nshear = 1e300\nhalf_width = 0.1\nlength = 1\n",
+            "'shear' is 1e300; give a finite shear of magnitude at most 1e6",
+        ),
+        (
+            "kind = \"double-wedge\"\ns0 = -2e6\ns1 = 0.3\nradius = 1\n",
+            "'s0'",
+        ),
+        (
+            "kind = \"double-wedge\"\ns0 = 0.5\ns1 = 0.5\nradius = 1\n",
+            "s0 = s1 = 0.5, a single line, not a wedge; use kind = \"hairline\" with shear = 0.5",
+        ),
     ];
     for (text, needle) in cases {
         let e = Target::parse(text).unwrap_err();
         assert!(e.to_string().contains(needle), "{text:?}: {e}");
         assert_eq!(e.exit_code(), 2);
+    }
+    // A dark region that holds no frequency cell is refused, naming the key, rather than optimized
+    // towards a dark mean over 0 cells.
+    for (text, key) in [
+        ("kind = \"blue-noise\"\nradius = 0\n", "raise radius"),
+        ("kind = \"blue-noise\"\nradius = 0.05\n", "raise radius"),
+        (
+            "kind = \"hairline\"\nshear = 0.5\nhalf_width = 0.1\nlength = 0\n",
+            "raise length",
+        ),
+        (
+            "kind = \"double-wedge\"\ns0 = 0.3\ns1 = 0.7\nradius = 0\n",
+            "raise radius or inner_radius",
+        ),
+    ] {
+        let t = Target::parse(text).unwrap();
+        let e = t.grid(256).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        let e = e.to_string();
+        assert!(
+            e.contains("darkens no frequency cell at N = 256") && e.contains(key),
+            "{text:?}: {e}"
+        );
     }
     // Beyond reach: a blue-noise disc of radius 1 darkens about pi N cells.
     let far = Target::parse("kind = \"blue-noise\"\nradius = 1.0\n").unwrap();

@@ -21,6 +21,7 @@
 //! ```
 
 use crate::error::{Error, Result};
+use crate::points::shear::MAX_SHEAR;
 use crate::spectrum::frequency;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -229,6 +230,17 @@ fn non_negative(name: &str, v: f64) -> Result<()> {
     Ok(())
 }
 
+/// A slope of a dark line is a shear: at most [`MAX_SHEAR`] in magnitude, as for the variance target
+/// and the integrands.
+fn max_shear(name: &str, v: f64) -> Result<()> {
+    if v.abs() > MAX_SHEAR {
+        return Err(Error::Input(format!(
+            "target parameter '{name}' is {v:?}; give a finite shear of magnitude at most {MAX_SHEAR:e}"
+        )));
+    }
+    Ok(())
+}
+
 fn dark_weight(w: Option<f64>) -> Result<f64> {
     let w = w.unwrap_or(DEFAULT_DARK_WEIGHT);
     finite("dark_weight", w)?;
@@ -290,6 +302,7 @@ impl Target {
         match self {
             Target::Hairline(h) => {
                 finite("shear", h.shear)?;
+                max_shear("shear", h.shear)?;
                 non_negative("half_width", h.half_width)?;
                 non_negative("opening", h.opening)?;
                 non_negative("length", h.length)?;
@@ -306,6 +319,14 @@ impl Target {
                         d.s0, d.s1
                     )));
                 }
+                if d.s0 == d.s1 {
+                    return Err(Error::Input(format!(
+                        "target has s0 = s1 = {}, a single line, not a wedge; use kind = \"hairline\" with shear = {} or widen [s0, s1]",
+                        d.s0, d.s0
+                    )));
+                }
+                max_shear("s0", d.s0)?;
+                max_shear("s1", d.s1)?;
                 non_negative("radius", d.radius)?;
                 non_negative("margin", d.margin)?;
                 non_negative("inner_radius", d.inner_radius)?;
@@ -507,6 +528,9 @@ impl Target {
             }
         }
         let dark_cells = dark.iter().filter(|&&d| d).count();
+        if dark_cells == 0 {
+            return Err(self.nothing_dark(n));
+        }
         let reach = REACH * n as f64;
         if dark_cells as f64 > reach {
             return Err(self.beyond_reach(n, dark_cells as f64));
@@ -614,6 +638,23 @@ fn variance_grid(v: &Variance, n: usize, res: usize, fit_radius: f64) -> Result<
 }
 
 impl Target {
+    /// A shape target whose dark region holds no frequency cell at `n`: there is nothing to darken,
+    /// and its dark mean would average over nothing.
+    fn nothing_dark(&self, n: usize) -> Error {
+        let keys = match self {
+            Target::Hairline(_) => "length (with half_width or opening) or inner_radius",
+            Target::DoubleWedge(_) => "radius or inner_radius",
+            Target::BlueNoise(_) => "radius",
+            _ => "extent, or darken more of the image",
+        };
+        Error::Input(format!(
+            "the {} target darkens no frequency cell at N = {n}: its dark region reaches no cell (the nearest \
+             lies at normalized frequency 1 / sqrt(N) = {:.3}); raise {keys}, or use a larger N",
+            self.kind(),
+            1.0 / (n as f64).sqrt()
+        ))
+    }
+
     fn beyond_reach(&self, n: usize, dark_cells: f64) -> Error {
         let reach = REACH * n as f64;
         Error::Input(format!(

@@ -173,7 +173,7 @@ impl SceneConfig {
             ));
         }
         let bound = self.shear_bound();
-        if !(bound <= MAX_SHEAR) {
+        if bound.is_nan() || bound > MAX_SHEAR {
             return Err(format!(
                 "this camera (fov = {}, aperture = {}, focus = {}, height = {}, position = {:?}) can put a \
                  shear of magnitude up to {bound:.3e} pixels per lens width on a pixel, beyond the largest \

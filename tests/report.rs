@@ -4,6 +4,7 @@
 //! on the warm cache (tables reused, the same numbers).
 
 use anisospec::compare::tables::start_sampler;
+use anisospec::converge::fit::MIN_RELATIVE_ERROR;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -151,6 +152,17 @@ fn num(row: &BTreeMap<String, String>, key: &str) -> f64 {
     v
 }
 
+/// A slope's 95% interval from its CSV fields: finite bounds, or `None` for the empty fields of an
+/// undefined interval.
+fn interval(row: &BTreeMap<String, String>) -> Option<(f64, f64)> {
+    let (lo, hi) = ("slope_ci_low", "slope_ci_high");
+    if row[lo].is_empty() && row[hi].is_empty() {
+        None
+    } else {
+        Some((num(row, lo), num(row, hi)))
+    }
+}
+
 fn read_npy(path: &Path) -> (Vec<u64>, Vec<f64>) {
     let bytes = std::fs::read(path).unwrap();
     let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
@@ -169,7 +181,8 @@ struct Point {
     mse_stderr: f64,
     seconds_per_estimate: f64,
     setup_seconds: f64,
-    slope: [f64; 3],
+    slope: f64,
+    interval: Option<(f64, f64)>,
 }
 
 /// report.md as its level-2 sections: the heading, the rows of its tables (cells trimmed, separator
@@ -290,11 +303,8 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             mse_stderr: num(r, "mse_stderr"),
             seconds_per_estimate: num(r, "seconds_per_estimate"),
             setup_seconds: num(r, "setup_seconds"),
-            slope: [
-                num(r, "slope"),
-                num(r, "slope_ci_low"),
-                num(r, "slope_ci_high"),
-            ],
+            slope: num(r, "slope"),
+            interval: interval(r),
         })
         .collect();
     let subjects: Vec<(String, String)> = section("Integrands").rows[1..]
@@ -319,14 +329,26 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             assert!(p.seconds_per_estimate > 0.0, "{p:?}");
             // Only a table has a one-off set-up: its own optimization at that N.
             assert_eq!(p.setup_seconds > 0.0, family == "optimized", "{p:?}");
-            assert_eq!(p.slope, study[0].slope, "one fit per study");
+            assert_eq!(
+                (p.slope, p.interval),
+                (study[0].slope, study[0].interval),
+                "one fit per study"
+            );
         }
         // With two N the fit goes through both points, whatever their weights.
         let (a, b) = (&study[0], &study[1]);
         let through = (b.mse / a.mse).ln() / (b.n as f64 / a.n as f64).ln();
-        let [slope, lo, hi] = a.slope;
+        let slope = a.slope;
         assert!((slope - through).abs() < 1e-9, "{slope} vs {through}");
-        assert!(lo <= slope && slope <= hi, "{:?}", a.slope);
+        // The interval is left empty exactly when a point's standard error defines no weight (an
+        // estimator whose error is the same for every shift, e.g. centred strata on an unmoved edge).
+        let weightless = study
+            .iter()
+            .any(|p| p.mse_stderr < MIN_RELATIVE_ERROR * p.mse);
+        assert_eq!(a.interval.is_none(), weightless, "{study:?}");
+        if let Some((lo, hi)) = a.interval {
+            assert!(lo <= slope && slope <= hi, "{slope} outside [{lo}, {hi}]");
+        }
     }
 
     // The arrays [integrand, sampler, N] hold the CSV's numbers bit for bit (the CSV prints the
@@ -388,7 +410,7 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
                 };
                 expect.push(format!("{:.3e} ± {:.1e}{shown}", p.mse, p.mse_stderr));
             }
-            let [slope, lo, hi] = study[0].slope;
+            let slope = study[0].slope;
             let p = &study[last];
             // The local slope: between the two largest N the sampler made.
             let mut made: Vec<_> = study.iter().map(|p| (p.n, p.mse)).collect();
@@ -401,7 +423,10 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
                 _ => "—".into(),
             };
             expect.extend([
-                format!("{slope:.2} [{lo:.2}, {hi:.2}]"),
+                match study[0].interval {
+                    Some((lo, hi)) => format!("{slope:.2} [{lo:.2}, {hi:.2}]"),
+                    None => format!("{slope:.2} [—]"),
+                },
                 local,
                 format!("{:.3}", p.seconds_per_estimate * 1e3),
                 format!("{:.2}", p.setup_seconds),

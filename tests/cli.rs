@@ -1295,7 +1295,8 @@ fn unwritable_output_folders_are_named() {
 
 /// Flags that a command would ignore are refused at parse time (exit 2, naming them): the sampler's
 /// flags with a point file, the shear's mode without a shear, the sampler's flags with render's
-/// reference, the oracle shear's options without --shear. Nothing is written.
+/// reference, the oracle shear's options without --shear, optimize's NUFFT tolerance with --exact.
+/// Nothing is written.
 #[test]
 fn flags_that_would_be_ignored_are_refused() {
     let (dir, input) = tmp("pts.npy");
@@ -1396,6 +1397,22 @@ fn flags_that_would_be_ignored_are_refused() {
             ],
             "required arguments were not provided:\n  --shear",
             &img,
+        ),
+        (
+            vec![
+                "optimize",
+                "--target",
+                "targets/hairline.toml",
+                "-n",
+                "16",
+                "--exact",
+                "--eps",
+                "1e-3",
+                "-o",
+                o,
+            ],
+            "'--exact' cannot be used with '--eps",
+            &out,
         ),
     ];
     for (args, needle, file) in &cases {

@@ -54,7 +54,7 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = 1e-6)]
     pub tol: f64,
     /// Compute the loss with the exact DFT instead of the NUFFT (slow; the reference).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "eps")]
     pub exact: bool,
     /// NUFFT tolerance for the loss and its gradient.
     #[arg(long, default_value_t = 1e-8)]

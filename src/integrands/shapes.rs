@@ -46,8 +46,9 @@ fn k2(k: &[i64]) -> [i64; 2] {
     [k[0], k[1]]
 }
 
-/// A Gaussian bump of width `sigma`, peak 1, centred at `centre` and made periodic on the torus (the
-/// sum of its images), so that it is smooth on the torus: `f(x) = Σ_m exp(−|x − c − m|² / (2σ²))`.
+/// A Gaussian bump of width `sigma`, centred at `centre` and made periodic on the torus (the sum of its
+/// images), so that it is smooth on the torus: `f(x) = Σ_m exp(−|x − c − m|² / (2σ²))`. Each image
+/// peaks at 1; for a wide `sigma` the images overlap and the sum exceeds 1.
 ///
 /// Integral `2πσ²`; `f̂(k) = 2πσ² exp(−2π²σ²|k|²) exp(−2πi k·c)`: both exact.
 #[derive(Clone, Debug)]

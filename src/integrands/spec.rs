@@ -88,7 +88,7 @@ fn build_fan(p: &Params) -> Result<Box<dyn Integrand>> {
 pub const FAMILIES: &[Family] = &[
     Family {
         name: "gaussian",
-        summary: "smooth: a periodic Gaussian bump exp(-|x-c|²/2σ²), peak 1",
+        summary: "smooth: a periodic Gaussian bump, the sum of the images of exp(-|x-c|²/2σ²) (peak about 1 for small σ)",
         keys: &[
             ("sigma", "width σ in (0, 1] (default 0.15)"),
             ("cx", "centre, first coordinate (default 0.5)"),

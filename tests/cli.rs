@@ -1951,3 +1951,181 @@ fn variance_warns_when_the_tail_dominates() {
         "the two cases no longer straddle the threshold"
     );
 }
+
+/// Realization counts, cone counts, table sets and `--average` above their limits are refused with
+/// exit code 2, naming the limit, before any work and without output (they used to panic with
+/// "capacity overflow", abort on an allocation, or run for days).
+#[test]
+fn counts_above_their_limits_are_refused() {
+    let (dir, out) = tmp("a.npy");
+    let o = out.to_str().unwrap();
+    let radial = dir.path().join("r.csv");
+    let r = radial.to_str().unwrap();
+    let max = "18446744073709551615";
+    let above_realizations = (anisospec::stats::MAX_REALIZATIONS + 1).to_string();
+    let above_cones = (anisospec::spectrum::profiles::MAX_CONES + 1).to_string();
+    for count in [max, above_cones.as_str()] {
+        rejects(
+            &[
+                "spectrum",
+                "--sampler",
+                "random",
+                "-n",
+                "16",
+                "--res",
+                "8",
+                "--cones",
+                count,
+                "--radial",
+                r,
+                "-o",
+                o,
+            ],
+            "largest cone count, 360",
+            &out,
+        );
+        assert!(!radial.exists());
+        rejects(
+            &[
+                "variance",
+                "--sampler",
+                "nrooks",
+                "--integrand",
+                "step:theta=0",
+                "-n",
+                "16",
+                "--cones",
+                count,
+            ],
+            "largest cone count, 360",
+            &out,
+        );
+    }
+    for count in [max, above_realizations.as_str()] {
+        rejects(
+            &[
+                "spectrum",
+                "--sampler",
+                "random",
+                "-n",
+                "16",
+                "--res",
+                "8",
+                "--realizations",
+                count,
+                "-o",
+                o,
+            ],
+            "largest realization count, 1000000",
+            &out,
+        );
+        for cmd in ["converge", "variance"] {
+            rejects(
+                &[
+                    cmd,
+                    "--sampler",
+                    "random",
+                    "--integrand",
+                    "disc",
+                    "-n",
+                    "4,16",
+                    "--realizations",
+                    count,
+                ],
+                "largest realization count, 1000000",
+                &out,
+            );
+        }
+    }
+    let png = dir.path().join("p.png");
+    for count in [max, "257"] {
+        rejects(
+            &[
+                "pixel-spectrum",
+                "--pixel",
+                "33,30",
+                "--res",
+                "4",
+                "--average",
+                count,
+                "-o",
+                png.to_str().unwrap(),
+            ],
+            "--average",
+            &png,
+        );
+    }
+}
+
+/// The same limits in a compare config, caught by `validate()` before any work.
+#[test]
+fn compare_config_counts_above_their_limits_are_refused() {
+    let (dir, config) = tmp("study.toml");
+    let out = dir.path().join("report");
+    let (c, o) = (config.to_str().unwrap(), out.to_str().unwrap());
+    let max = usize::MAX;
+    for (text, needle) in [
+        (
+            format!("realizations = {max}\n"),
+            "realizations = 18446744073709551615 is above",
+        ),
+        (
+            format!("spectra_realizations = {max}\n"),
+            "largest realization count",
+        ),
+        (
+            format!("table_sets = {max}\n"),
+            "table_sets = 18446744073709551615",
+        ),
+    ] {
+        std::fs::write(&config, text).unwrap();
+        rejects(&["compare", "--config", c, "--out", o], needle, &out);
+    }
+}
+
+/// Each bounded flag's `--help` states its limit, the value of the constant that enforces it.
+#[test]
+fn bounded_flags_state_their_limits_in_help() {
+    let realizations = anisospec::stats::MAX_REALIZATIONS.to_string();
+    let cones = anisospec::spectrum::profiles::MAX_CONES.to_string();
+    let average = anisospec::cli::pixel_spectrum::MAX_AVERAGE.to_string();
+    for (cmd, limits) in [
+        ("spectrum", vec![&realizations, &cones]),
+        ("converge", vec![&realizations]),
+        ("variance", vec![&realizations, &cones]),
+        ("pixel-spectrum", vec![&average]),
+    ] {
+        let o = anisospec(&[cmd, "--help"]);
+        let help = String::from_utf8_lossy(&o.stdout);
+        for limit in limits {
+            assert!(help.contains(limit.as_str()), "{cmd} --help lacks {limit}");
+        }
+    }
+}
+
+/// A fan over the widest shear range is predicted in well under a second (its coefficients' cost used
+/// to grow with the range: ±1e6 wrote nothing after minutes), with a finite variance.
+#[test]
+fn variance_of_a_wide_fan_finishes_finite() {
+    let (_dir, csv) = tmp("fan.csv");
+    let o = anisospec(&[
+        "variance",
+        "--sampler",
+        "random",
+        "--integrand",
+        "fan:s0=-1e6,s1=1e6@xu",
+        "-n",
+        "4",
+        "--realizations",
+        "4",
+        "--res",
+        "16",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let row = text.lines().nth(1).unwrap();
+    let variance: f64 = row.split(',').nth(1).unwrap().parse().unwrap();
+    assert!(variance.is_finite() && variance > 0.0, "{row}");
+}

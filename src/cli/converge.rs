@@ -26,7 +26,8 @@ pub struct ConvergeArgs {
         allow_negative_numbers = true
     )]
     pub n: Vec<usize>,
-    /// Realizations per N (R): each an independent set with its own random toroidal shift.
+    /// Realizations per N (R): each an independent set with its own random toroidal shift; 2 to
+    /// 1000000.
     #[arg(long, default_value_t = 100)]
     pub realizations: usize,
     /// Random seed: the same seed gives the same numbers whatever the thread count.

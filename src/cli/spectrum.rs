@@ -44,7 +44,7 @@ pub struct SpectrumArgs {
     #[arg(long, default_value_t = 128)]
     pub res: usize,
     /// Realizations averaged (independent sets). With --sampler, default 32; with --input, at most the
-    /// number of sets in the file (default: all of them). --stderr needs at least 2.
+    /// number of sets in the file (default: all of them). --stderr needs at least 2. At most 1000000.
     #[arg(long)]
     pub realizations: Option<usize>,
     /// Use the exact O(N K²) DFT instead of the NUFFT.
@@ -72,7 +72,7 @@ pub struct SpectrumArgs {
     #[arg(long)]
     pub radial: Option<PathBuf>,
     /// Number of directional cones in the radial CSV (cone c is centred on angle c·180°/M; cone 0 holds
-    /// the k1 axis).
+    /// the k1 axis); at most 360.
     #[arg(long, default_value_t = 0, requires = "radial")]
     pub cones: usize,
 }
@@ -94,6 +94,7 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
             require_extension(path, flag, ext, what)?;
         }
     }
+    crate::spectrum::profiles::check_cones("--cones", args.cones)?;
     match args.realizations {
         Some(0) => {
             return Err(Error::Usage(
@@ -107,7 +108,8 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
                 "give --realizations 2 or more",
             ))
         }
-        _ => {}
+        Some(r) => crate::stats::check_realizations("--realizations", r)?,
+        None => {}
     }
     let inputs = match (&args.sampler, &args.input) {
         (Some(name), _) => samplers::input_files(name),

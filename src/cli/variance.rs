@@ -45,10 +45,10 @@ pub struct VarianceArgs {
     /// need K of a few N for an accurate sum; cheap for edges aligned with an axis.
     #[arg(long, value_name = "M")]
     pub res_per_n: Option<usize>,
-    /// Realizations of the sampler averaged for E[P_N(k)].
+    /// Realizations of the sampler averaged for E[P_N(k)]; 2 to 1000000.
     #[arg(long, default_value_t = 100)]
     pub realizations: usize,
-    /// Number of directional cones (cone c centred on c·180°/M; cone 0 holds the k1 axis).
+    /// Number of directional cones (cone c centred on c·180°/M; cone 0 holds the k1 axis); 1 to 360.
     #[arg(long, default_value_t = 4)]
     pub cones: usize,
     /// Use the exact DFT for full-grid spectra instead of the NUFFT.

@@ -197,6 +197,7 @@ impl CompareConfig {
                 "realizations must be at least 2 for a standard error".into(),
             ));
         }
+        crate::stats::check_realizations("realizations =", self.realizations)?;
         for c in &self.pixel_classes {
             if !["in-focus", "hairline", "double-wedge"].contains(&c.as_str()) {
                 return Err(Error::Usage(format!(
@@ -371,6 +372,12 @@ impl CompareConfig {
                     "{key} asks for N = {n}, but an optimized table (tables) needs at least 2 points; raise {key} to 2 or more, or set tables = []"
                 )));
             }
+            crate::points::coordinate_count(self.table_sets, n, 4).map_err(|e| {
+                Error::Usage(format!(
+                    "table_sets = {} at N = {n} (from {key}): {e}, e.g. table_sets = 16",
+                    self.table_sets
+                ))
+            })?;
         }
         let ranges: Vec<(f64, f64)> = self
             .analytic
@@ -440,6 +447,7 @@ impl CompareConfig {
                 "spectra_realizations = 0 averages nothing; give at least 1, e.g. spectra_realizations = 32".into(),
             ));
         }
+        crate::stats::check_realizations("spectra_realizations =", self.spectra_realizations)?;
         Ok(())
     }
 }

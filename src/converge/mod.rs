@@ -67,7 +67,8 @@ pub struct Convergence {
     pub fit: Option<SlopeFit>,
 }
 
-/// Checks a list of `N` and a realization count shared by the variance and convergence studies.
+/// Checks a list of `N` and a realization count (2 to [`crate::stats::MAX_REALIZATIONS`]) shared by
+/// the variance and convergence studies.
 pub fn check_plan(
     sampler: &dyn Sampler,
     f: &dyn Integrand,
@@ -94,6 +95,7 @@ pub fn check_plan(
             "--realizations {realizations} gives no standard error; use at least 2 (e.g. 100)"
         )));
     }
+    crate::stats::check_realizations("--realizations", realizations)?;
     for &n in ns {
         validate_n(sampler, n)?;
     }

@@ -327,6 +327,7 @@ pub fn optimize_sets(
             "--sets 0 asks for nothing; give at least one set".into(),
         ));
     }
+    crate::points::coordinate_count(sets, setup.n, setup.dims).map_err(Error::Usage)?;
     let objective = setup.objective()?;
     let init = match &setup.init {
         Some(name) => {

@@ -105,7 +105,8 @@ where
 }
 
 /// The expected spectrum of `sampler` in projection `proj`: realization `r` is set `r` of `seed`
-/// (the same sets as `anisospec sample` with that seed).
+/// (the same sets as `anisospec sample` with that seed). At most [`crate::stats::MAX_REALIZATIONS`]
+/// realizations.
 pub fn of_sampler(
     sampler: &dyn Sampler,
     n: usize,
@@ -115,6 +116,7 @@ pub fn of_sampler(
     seed: u64,
     method: Method,
 ) -> Result<ExpectedSpectrum> {
+    crate::stats::check_realizations("--realizations", realizations)?;
     validate_n(sampler, n)?;
     let dims = sampler.dims();
     expected_spectrum(realizations, res, method, &sampler.name(), |r| {

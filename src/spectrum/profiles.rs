@@ -5,7 +5,7 @@
 
 use super::expected::ExpectedSpectrum;
 use super::frequency;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::output::write_atomic;
 use std::f64::consts::PI;
 use std::io::Write;
@@ -14,6 +14,24 @@ use std::path::Path;
 /// The radial annulus of a frequency: `r` such that `r − ½ ≤ |k| < r + ½`.
 pub fn annulus(k1: i64, k2: i64) -> usize {
     (((k1 * k1 + k2 * k2) as f64).sqrt() + 0.5).floor() as usize
+}
+
+/// The most directional cones a profile or a variance prediction splits the half-turn into: cones of
+/// half a degree. At the default grid (`--res 128`) the outermost annulus, `r = 63`, holds about
+/// `2π·63 ≈ 400` frequencies over the folded half-turn, so 360 cones is about the finest split that still
+/// puts one frequency in each; a finer one leaves most cones empty at every radius of that grid, and
+/// its output grows with the count (one CSV column, or one running sum per realization, per cone).
+pub const MAX_CONES: usize = 360;
+
+/// Checks a cone count set by `name` (e.g. `--cones`) against [`MAX_CONES`]; the message writes
+/// `{name} {cones}`. Whether 0 is allowed is the caller's (a radial CSV takes 0 as no cones).
+pub fn check_cones(name: &str, cones: usize) -> Result<()> {
+    if cones > MAX_CONES {
+        return Err(Error::Usage(format!(
+            "{name} {cones} is above the largest cone count, {MAX_CONES} (cones of half a degree; finer ones hold no frequency at most radii of the grid); lower it, e.g. {name} 8"
+        )));
+    }
+    Ok(())
 }
 
 /// The directional cone of a frequency among `cones` sectors of the folded angle

@@ -241,35 +241,72 @@ fn check_config(cfg: &VarianceConfig) -> Result<()> {
             "--cones 0: use at least one cone (1 = no split)".into(),
         ));
     }
+    crate::spectrum::profiles::check_cones("--cones", cfg.cones)?;
     Ok(())
 }
 
-/// Per-realization `(V_r, V_r per cone)` at size `n`.
+/// Realizations whose per-cone sums are held in memory at once: the rest are folded into running means
+/// as each batch ends, so memory does not grow with `R` beyond one `f64` per realization.
+const REALIZATION_BATCH: usize = 1024;
+
+/// The per-realization sums at one `N`: every `V_r`, and each cone's mean and standard error over the
+/// realizations.
+struct RealizationSums {
+    /// `V_r` in realization order.
+    totals: Vec<f64>,
+    /// Per cone: `(mean, stderr)` of its share of `V_r`.
+    cones: Vec<(f64, f64)>,
+}
+
+/// Per-realization `V_r` at size `n`, and per cone the mean and standard error of its share. Realizations
+/// run in parallel in batches of [`REALIZATION_BATCH`] and are reduced in realization order (Welford's
+/// update for the cones), so a seed gives the same bits whatever the thread count.
 fn realizations(
     sampler: &dyn Sampler,
     spec: &Spectrum,
     n: usize,
     res: usize,
     cfg: &VarianceConfig,
-) -> Vec<(f64, Vec<f64>)> {
-    (0..cfg.realizations)
-        .into_par_iter()
-        .map(|r| {
-            let set = sampler.generate(n, &mut rng::substream(cfg.seed, r as u64, n as u64));
-            let mut cones = vec![0.0; cfg.cones];
-            for (p, active) in spec.planes.iter().zip(&spec.active) {
-                if active.is_empty() {
-                    continue;
-                }
-                let pts = project(&set, sampler.dims(), *p);
-                let power = power_at(&pts, res, active, cfg.method);
-                for (e, pk) in active.iter().zip(power) {
-                    cones[e.2] += e.1 * pk / n as f64;
-                }
+) -> RealizationSums {
+    let one = |r: usize| {
+        let set = sampler.generate(n, &mut rng::substream(cfg.seed, r as u64, n as u64));
+        let mut cones = vec![0.0; cfg.cones];
+        for (p, active) in spec.planes.iter().zip(&spec.active) {
+            if active.is_empty() {
+                continue;
             }
-            (cones.iter().sum(), cones)
-        })
-        .collect()
+            let pts = project(&set, sampler.dims(), *p);
+            let power = power_at(&pts, res, active, cfg.method);
+            for (e, pk) in active.iter().zip(power) {
+                cones[e.2] += e.1 * pk / n as f64;
+            }
+        }
+        cones
+    };
+    let mut totals = Vec::with_capacity(cfg.realizations);
+    // Welford: per cone the running mean and sum of squared deviations.
+    let mut mean = vec![0.0; cfg.cones];
+    let mut m2 = vec![0.0; cfg.cones];
+    for start in (0..cfg.realizations).step_by(REALIZATION_BATCH) {
+        let end = (start + REALIZATION_BATCH).min(cfg.realizations);
+        let batch: Vec<Vec<f64>> = (start..end).into_par_iter().map(one).collect();
+        for cones in batch {
+            totals.push(cones.iter().sum());
+            let count = totals.len() as f64;
+            for ((m, s), x) in mean.iter_mut().zip(&mut m2).zip(&cones) {
+                let delta = x - *m;
+                *m += delta / count;
+                *s += delta * (x - *m);
+            }
+        }
+    }
+    let r = cfg.realizations as f64;
+    let cones = mean
+        .iter()
+        .zip(&m2)
+        .map(|(&m, &s)| (m, (s / (r - 1.0) / r).sqrt()))
+        .collect();
+    RealizationSums { totals, cones }
 }
 
 /// Predicts the variance of `sampler` on `f` for every `N` of `ns`.
@@ -294,14 +331,8 @@ pub fn predict(
         }
         let spec = &spec.as_ref().expect("computed above").1;
         let per = realizations(sampler, spec, n, res, cfg);
-        let (grid, stderr) = mean_and_stderr(per.iter().map(|p| p.0));
-        let mut cones = Vec::with_capacity(cfg.cones);
-        let mut cone_stderr = Vec::with_capacity(cfg.cones);
-        for c in 0..cfg.cones {
-            let (m, s) = mean_and_stderr(per.iter().map(|p| p.1[c]));
-            cones.push(m);
-            cone_stderr.push(s);
-        }
+        let (grid, stderr) = mean_and_stderr(per.totals.iter().copied());
+        let (cones, cone_stderr) = per.cones.into_iter().unzip();
         let tail = var_f.map(|v| (v - spec.total).max(0.0) / n as f64);
         points.push(VariancePoint {
             n,

@@ -105,7 +105,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             // (chi2/dof), and the interval holds only the two points' own errors, not a curvature.
             // A standard error of 0 (realizations that agree by chance) defines no weight: no interval.
             Some(fit) if fit.interval().is_none() => println!(
-                "{}: slope {:.3} (95% CI —, chi2/dof —: a standard error of 0 gives no interval; raise --realizations)",
+                "{}: slope {:.3} (95% CI —, chi2/dof —: the realizations agree, so their standard error, 0, gives no interval; if the set is random, raise --realizations)",
                 s.sampler, fit.slope
             ),
             Some(fit) if s.points.len() == 2 => println!(
@@ -116,7 +116,10 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
                 "{}: slope {:.3} (95% CI {:.3} .. {:.3}, chi2/dof {:.2})",
                 s.sampler, fit.slope, fit.ci95.0, fit.ci95.1, fit.chi2_per_dof
             ),
-            None => println!("{}:", s.sampler),
+            None => println!(
+                "{}: no slope (a log-log fit needs two or more distinct N and a positive MSE at each)",
+                s.sampler
+            ),
         }
         println!(
             "{:>8} {:>12} {:>10} {:>12}",

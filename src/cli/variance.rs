@@ -124,19 +124,28 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
         println!();
     }
     if let Some(fit) = &pred.fit {
-        println!(
-            "predicted slope {:.3} (95% CI {:.3} .. {:.3})",
-            fit.slope, fit.ci95.0, fit.ci95.1
-        );
+        match fit.interval() {
+            Some((lo, hi)) => println!(
+                "predicted slope {:.3} (95% CI {lo:.3} .. {hi:.3})",
+                fit.slope
+            ),
+            None => println!(
+                "predicted slope {:.3} (95% CI —: the realizations agree, so their standard error, 0, gives no interval)",
+                fit.slope
+            ),
+        }
     }
     for (c, fit) in pred.cone_fits.iter().enumerate() {
         if let Some(fit) = fit {
-            println!(
-                "  cone {c} ({:.0}°) slope {:.3} ± {:.3}",
-                c as f64 * 180.0 / args.cones as f64,
-                fit.slope,
-                fit.stderr
-            );
+            let angle = c as f64 * 180.0 / args.cones as f64;
+            if fit.errors_defined {
+                println!(
+                    "  cone {c} ({angle:.0}°) slope {:.3} ± {:.3}",
+                    fit.slope, fit.stderr
+                );
+            } else {
+                println!("  cone {c} ({angle:.0}°) slope {:.3} ± —", fit.slope);
+            }
         }
     }
     warn_dominant_tail(&pred);

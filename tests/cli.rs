@@ -2037,6 +2037,18 @@ fn counts_above_their_limits_are_refused() {
             );
         }
     }
+    let gallery = dir.path().join("g");
+    rejects(
+        &[
+            "gallery",
+            "--out",
+            gallery.to_str().unwrap(),
+            "--realizations",
+            &above_realizations,
+        ],
+        "largest realization count, 1000000",
+        &gallery,
+    );
     let png = dir.path().join("p.png");
     for count in [max, "257"] {
         rejects(
@@ -2094,6 +2106,7 @@ fn bounded_flags_state_their_limits_in_help() {
         ("converge", vec![&realizations]),
         ("variance", vec![&realizations, &cones]),
         ("pixel-spectrum", vec![&average]),
+        ("gallery", vec![&realizations]),
     ] {
         let o = anisospec(&[cmd, "--help"]);
         let help = String::from_utf8_lossy(&o.stdout);

@@ -50,7 +50,7 @@ pub struct GalleryArgs {
     /// Frequency grid side K (even).
     #[arg(long, default_value_t = 128)]
     pub res: usize,
-    /// Realizations averaged per spectrum.
+    /// Realizations averaged per spectrum (at most 1000000).
     #[arg(long, default_value_t = 64)]
     pub realizations: usize,
     /// NUFFT tolerance.
@@ -64,6 +64,7 @@ pub struct GalleryArgs {
 /// Runs `anisospec gallery`.
 pub fn run(args: &GalleryArgs) -> Result<()> {
     check_res(args.res)?;
+    crate::stats::check_realizations("--realizations", args.realizations)?;
     crate::output::check_folder(&args.out, "--out", "gallery")?;
     let method = Method::nufft(args.eps)?;
     let gallery = args.out.join("gallery");

@@ -803,6 +803,15 @@ fn compare_rejects_bad_numbers_and_clashing_names_before_any_work() {
     type Mend = fn(&mut CompareConfig);
     let cases: Vec<(Mend, &str)> = vec![
         (|c| c.table_seconds = f64::NAN, "table_seconds = NaN"),
+        (
+            |c| {
+                c.ns = vec![16, 1_000_000_000];
+                c.classical = vec!["sobol".into()];
+                c.sheared = vec!["sobol".into()];
+                c.tables.clear();
+            },
+            "no sampler of the study makes N = 1000000000",
+        ),
         (|c| c.table_seconds = 1e20, "at most 1e6"),
         (|c| c.table_seconds = -1.0, "table_seconds = -1"),
         (

@@ -265,6 +265,9 @@ impl CompareConfig {
                     .map_err(|e| Error::Usage(format!("ns: {e}")))?;
             }
         }
+        if self.tables.is_empty() {
+            self.validate_ns_made()?;
+        }
         for (key, list) in [("classical", &self.classical), ("sheared", &self.sheared)] {
             if let Some(name) = first_repeat(list) {
                 return Err(Error::Usage(format!(
@@ -342,6 +345,34 @@ impl CompareConfig {
 
     /// `table_seconds`, `table_sets`, and every table target at every N it is built for (`ns` and
     /// `spectra_n`), for the analytic integrands' shear ranges and the gallery's.
+    /// Refuses an N of `ns` that no classical or sheared sampler makes (each would use its nearest
+    /// valid N instead), when no table runs at it either: the report's columns at that N would hold
+    /// only other N.
+    fn validate_ns_made(&self) -> Result<()> {
+        let samplers = self
+            .classical
+            .iter()
+            .chain(&self.sheared)
+            .map(|name| crate::samplers::build(name, 4))
+            .collect::<Result<Vec<_>>>()?;
+        for &n in &self.ns {
+            let used: Vec<usize> = samplers
+                .iter()
+                .map(|s| crate::samplers::usable_n(s.as_ref(), n))
+                .collect();
+            if used.iter().all(|&u| u != n) {
+                let nearest = *used
+                    .iter()
+                    .min_by_key(|&&u| u.abs_diff(n))
+                    .expect("classical is not empty");
+                return Err(Error::Usage(format!(
+                    "ns: no sampler of the study makes N = {n} (each would use its nearest valid N, e.g. {nearest}), so the report's columns at N = {n} would hold other N; give an N a sampler makes, e.g. {nearest}"
+                )));
+            }
+        }
+        Ok(())
+    }
+
     fn validate_tables(&self) -> Result<()> {
         if !(self.table_seconds.is_finite()
             && self.table_seconds > 0.0

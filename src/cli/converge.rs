@@ -105,7 +105,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             // (chi2/dof), and the interval holds only the two points' own errors, not a curvature.
             // A standard error of 0 (realizations that agree by chance) defines no weight: no interval.
             Some(fit) if fit.interval().is_none() => println!(
-                "{}: slope {:.3} (95% CI —, chi2/dof —: the realizations agree, so their standard error, 0, gives no interval; if the set is random, raise --realizations)",
+                "{}: slope {:.3} (95% CI —, chi2/dof —: the realizations' standard error is under 1e-9 of the value, which gives no interval; if the set is random, raise --realizations)",
                 s.sampler, fit.slope
             ),
             Some(fit) if s.points.len() == 2 => println!(
@@ -113,8 +113,13 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
                 s.sampler, fit.slope, fit.ci95.0, fit.ci95.1
             ),
             Some(fit) => println!(
-                "{}: slope {:.3} (95% CI {:.3} .. {:.3}, chi2/dof {:.2})",
-                s.sampler, fit.slope, fit.ci95.0, fit.ci95.1, fit.chi2_per_dof
+                "{}: slope {:.3} (95% CI {:.3} .. {:.3}, chi2/dof {})",
+                s.sampler,
+                fit.slope,
+                fit.ci95.0,
+                fit.ci95.1,
+                fit.chi2(s.points.len())
+                    .map_or_else(|| "—".to_string(), |c| format!("{c:.2}"))
             ),
             None => println!(
                 "{}: no slope (a log-log fit needs two or more distinct N and a positive MSE at each)",

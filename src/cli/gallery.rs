@@ -4,7 +4,7 @@
 use super::ImageKind;
 use crate::error::Result;
 use crate::output::sheet::{write_sheet, Panel};
-use crate::output::{write_atomic, write_folder};
+use crate::output::{write_atomic, write_folder, ReportMarker};
 use crate::points::Projection;
 use crate::samplers::{self, usable_n};
 use crate::spectrum::expected::of_sampler;
@@ -30,6 +30,12 @@ const GALLERY_4D: [&str; 9] = [
     "lattice",
     "xuyv-mj",
 ];
+
+/// The gallery's index page and its first line, which mark a folder holding an earlier gallery.
+const GALLERY_MARKER: ReportMarker = ReportMarker {
+    file: "index.md",
+    first_line: "# Expected power spectra of the classical samplers",
+};
 
 /// Spectra of every classical sampler in one folder.
 #[derive(Debug, clap::Args)]
@@ -69,7 +75,7 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
     let method = Method::nufft(args.eps)?;
     let gallery = args.out.join("gallery");
     // The whole gallery or nothing: a failure leaves an earlier one as it was.
-    write_folder(&gallery, "index.md", "--out", |dir| {
+    write_folder(&gallery, GALLERY_MARKER, "--out", |dir| {
         let mut rows = Vec::new();
         let mut spectra = Vec::new();
         let jobs = GALLERY_2D
@@ -123,8 +129,8 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
             );
             write_sheet(&dir.join(file), &title, &panels, 5)?;
         }
-        write_atomic(&dir.join("index.md"), |w| {
-            writeln!(w, "# Expected power spectra of the classical samplers\n")?;
+        write_atomic(&dir.join(GALLERY_MARKER.file), |w| {
+            writeln!(w, "{}\n", GALLERY_MARKER.first_line)?;
             writeln!(
                 w,
                 "{} realizations each, K = {}, NUFFT eps = {}, seed {}. PNG: log10 P from -2 (black) to 1 (white), \
@@ -145,7 +151,7 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
             Ok(())
         })
     })?;
-    let index = gallery.join("index.md");
+    let index = gallery.join(GALLERY_MARKER.file);
     eprintln!("gallery written to {}", index.display());
     Ok(())
 }

@@ -130,7 +130,7 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
                 fit.slope
             ),
             None => println!(
-                "predicted slope {:.3} (95% CI —: the realizations agree, so their standard error, 0, gives no interval)",
+                "predicted slope {:.3} (95% CI —: the realizations' standard error is under 1e-9 of the value, which gives no interval)",
                 fit.slope
             ),
         }

@@ -343,8 +343,6 @@ impl CompareConfig {
         self.validate_sampler_labels()
     }
 
-    /// `table_seconds`, `table_sets`, and every table target at every N it is built for (`ns` and
-    /// `spectra_n`), for the analytic integrands' shear ranges and the gallery's.
     /// Refuses an N of `ns` that no classical or sheared sampler makes (each would use its nearest
     /// valid N instead), when no table runs at it either: the report's columns at that N would hold
     /// only other N.
@@ -373,6 +371,8 @@ impl CompareConfig {
         Ok(())
     }
 
+    /// `table_seconds`, `table_sets`, and every table target at every N it is built for (`ns` and
+    /// `spectra_n`), for the analytic integrands' shear ranges and the gallery's.
     fn validate_tables(&self) -> Result<()> {
         if !(self.table_seconds.is_finite()
             && self.table_seconds > 0.0

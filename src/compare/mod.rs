@@ -20,7 +20,7 @@ use crate::render::scene::Scene;
 pub use crate::samplers::usable_n;
 use crate::samplers::{self, Sampler, Sheared};
 use config::CompareConfig;
-use report::REPORT_FILE;
+use report::REPORT_MARKER;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -253,7 +253,7 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
 pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outcome> {
     config.validate()?;
     crate::output::check_folder(out, "--out", "report")?;
-    crate::output::check_report_folder(out, REPORT_FILE, "--out")?;
+    crate::output::check_report_folder(out, REPORT_MARKER, "--out")?;
     check_cache_outside(cache_dir, out)?;
     crate::output::check_folder(cache_dir, "--cache", "cache")?;
     let started = Instant::now();
@@ -314,7 +314,7 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
         seconds: started.elapsed().as_secs_f64(),
     };
     // The whole folder or nothing: a failure while writing it leaves an earlier report as it was.
-    crate::output::write_folder(out, REPORT_FILE, "--out", |staging| {
+    crate::output::write_folder(out, REPORT_MARKER, "--out", |staging| {
         report::write(&outcome, &specs, &tables, staging)
     })?;
     Ok(outcome)

@@ -8,7 +8,7 @@ use crate::converge::{plot, Convergence};
 use crate::error::Result;
 use crate::output::plot::{write_loglog_png, LogLogPlot, Series, XScale};
 use crate::output::sheet::{write_sheet, Panel};
-use crate::output::{write_atomic, write_npy};
+use crate::output::{write_atomic, write_npy, ReportMarker};
 use crate::points::Projection;
 use crate::spectrum::expected::of_sampler;
 use crate::spectrum::Method;
@@ -17,8 +17,12 @@ use crate::targets::Target;
 use std::io::Write;
 use std::path::Path;
 
-/// The report's main file; a folder holding it holds an earlier report, which a new one replaces.
-pub const REPORT_FILE: &str = "report.md";
+/// The report's main file and its first line; a folder holding it holds an earlier report, which a new
+/// one replaces.
+pub const REPORT_MARKER: ReportMarker = ReportMarker {
+    file: "report.md",
+    first_line: "# anisospec compare",
+};
 
 /// A file-name-safe version of a label.
 pub fn slug(label: &str) -> String {
@@ -414,8 +418,8 @@ fn write_markdown(
 ) -> Result<()> {
     let c = &outcome.config;
     let r = c.realizations;
-    write_atomic(&out.join(REPORT_FILE), |w| {
-        writeln!(w, "# anisospec compare\n")?;
+    write_atomic(&out.join(REPORT_MARKER.file), |w| {
+        writeln!(w, "{}\n", REPORT_MARKER.first_line)?;
         writeln!(
             w,
             "Every estimate integrates one 4D integrand (x, y pixel; u, v lens) with N samples from an independent set \

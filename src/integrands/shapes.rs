@@ -508,7 +508,8 @@ impl Fan {
 
 /// Octaves `±2^j`, `|j| ≤ FAN_OCTAVES`, at which a fan's shear range is cut for the quadrature of `f̂`
 /// (those above half of `min(|c|, |c − 1|)`): `2^20` is past [`crate::points::shear::MAX_SHEAR`], the
-/// largest shear a fan may have, and `2^−20` is finer than any offset `c` a study places near a corner.
+/// largest shear a fan may have. An offset `c` within `2^−20` of a corner leaves the innermost piece
+/// uncut, which costs nothing: there the vertices move by at most about `|c|`.
 const FAN_OCTAVES: i32 = 20;
 
 impl Integrand for Fan {

@@ -102,12 +102,31 @@ pub fn write_group<T>(
 /// that a new one replaces. Other files in its folder (notes, a study's TOML) are left alone.
 const REPORT_FILE_EXTENSIONS: [&str; 3] = ["png", "npy", "csv"];
 
-/// Checks, before any work, that `dest` (given by `flag`) may take a report whose main file is
-/// `marker` (`report.md`, `index.md`): it is missing, empty, or holds an earlier report (its `marker`).
-/// A new report replaces an earlier one's data and pictures, so a folder of other files is refused
-/// with a usage error naming it and the fix, and nothing in it is touched.
-pub fn check_report_folder(dest: &Path, marker: &str, flag: &str) -> Result<()> {
-    if !dest.is_dir() || dest.join(marker).is_file() {
+/// The main file every report of one kind writes, and the line it starts with: a folder whose file
+/// of that name starts with that line holds an earlier report of that kind (a `report.md` of someone
+/// else's does not).
+#[derive(Clone, Copy, Debug)]
+pub struct ReportMarker {
+    /// File name, e.g. `report.md`.
+    pub file: &'static str,
+    /// Its first line, e.g. `# anisospec compare`.
+    pub first_line: &'static str,
+}
+
+impl ReportMarker {
+    /// Whether `dir` holds this marker: the file, starting with the line.
+    fn is_in(&self, dir: &Path) -> bool {
+        std::fs::read_to_string(dir.join(self.file))
+            .is_ok_and(|text| text.lines().next() == Some(self.first_line))
+    }
+}
+
+/// Checks, before any work, that `dest` (given by `flag`) may take a report marked by `marker`: it is
+/// missing, empty, or holds an earlier report (its marker). A new report replaces an earlier one's
+/// data and pictures, so a folder of other files is refused with a usage error naming it and the fix,
+/// and nothing in it is touched.
+pub fn check_report_folder(dest: &Path, marker: ReportMarker, flag: &str) -> Result<()> {
+    if !dest.is_dir() || marker.is_in(dest) {
         return Ok(());
     }
     let entries = std::fs::read_dir(dest).map_err(|e| Error::io("read the folder", dest, e))?;
@@ -132,10 +151,17 @@ pub fn check_report_folder(dest: &Path, marker: &str, flag: &str) -> Result<()> 
         .join(", ");
     let more = if others.len() > 3 { ", ..." } else { "" };
     Err(Error::Usage(format!(
-        "{} holds other files ({shown}{more}) and no {marker}, so it is not an earlier report, and a \
-         new report replaces the data and pictures of the one before it; give {flag} a new or empty folder",
-        dest.display()
+        "{} holds other files ({shown}{more}) and no {} of this tool, so it is not an earlier report, and \
+         a new report replaces the data and pictures of the one before it; give {flag} a new or empty folder",
+        dest.display(),
+        marker.file
     )))
+}
+
+/// Whether `path` is a folder and not a link to one: pruning never reaches through a link into a
+/// folder the report does not own.
+fn is_real_folder(path: &Path) -> bool {
+    std::fs::symlink_metadata(path).is_ok_and(|m| m.is_dir())
 }
 
 /// Whether a folder entry is a temporary file or folder of this crate (an atomic write in progress,
@@ -150,12 +176,14 @@ fn is_staging(name: &std::ffi::OsStr) -> bool {
 /// replaces the old one: in `dest` and in each subfolder the new report wrote, every data file or
 /// picture (`.png`, `.npy`, `.csv`) it did not write goes, so no stale plot of an earlier study stays
 /// beside the new ones; other files, other subfolders and the targets of links are left alone. `dest`
-/// must pass [`check_report_folder`] with `marker`, the file every report writes. On failure none of
-/// `dest`'s files is touched, `dest` itself goes again if this call created it, and an error names the
-/// final path, not the temporary one.
+/// must pass [`check_report_folder`] with `marker`, checked here again (a caller checks it before a
+/// long run too). On a
+/// failure before the move none of `dest`'s files is touched, `dest` itself goes again if this call
+/// created it, and an error names the final path, not the temporary one; a failure while moving or
+/// pruning leaves the new files moved so far beside old ones.
 pub fn write_folder<T>(
     dest: &Path,
-    marker: &str,
+    marker: ReportMarker,
     flag: &str,
     write: impl FnOnce(&Path) -> Result<T>,
 ) -> Result<T> {
@@ -250,8 +278,12 @@ fn move_tree(from: &Path, to: &Path) -> Result<Vec<PathBuf>> {
 /// files with a report extension ([`REPORT_FILE_EXTENSIONS`]) that are not in `written`. Links are
 /// removed, never followed; temporary files of this crate are left to their owner.
 fn prune_stale(dest: &Path, written: &[PathBuf]) -> Result<()> {
-    let folders =
-        std::iter::once(dest).chain(written.iter().map(PathBuf::as_path).filter(|p| p.is_dir()));
+    let folders = std::iter::once(dest).chain(
+        written
+            .iter()
+            .map(PathBuf::as_path)
+            .filter(|p| is_real_folder(p)),
+    );
     for dir in folders {
         let entries = std::fs::read_dir(dir).map_err(|e| Error::io("read the folder", dir, e))?;
         for entry in entries {
@@ -466,6 +498,16 @@ fn same_file(a: &Path, b: &Path) -> bool {
 mod tests {
     use super::*;
 
+    /// Test reports: a main file `a.md` or `report.md` starting with `# a report`.
+    const MARK: ReportMarker = ReportMarker {
+        file: "a.md",
+        first_line: "# a report",
+    };
+    const REPORT: ReportMarker = ReportMarker {
+        file: "report.md",
+        first_line: "# a report",
+    };
+
     fn leftovers(dir: &Path) -> Vec<String> {
         std::fs::read_dir(dir)
             .unwrap()
@@ -507,7 +549,7 @@ mod tests {
     fn a_failed_folder_writes_nothing() {
         let dir = tempfile::tempdir().unwrap();
         let report = dir.path().join("report");
-        let failed = write_folder(&report, "a.md", "--out", |stage| {
+        let failed = write_folder(&report, MARK, "--out", |stage| {
             write_atomic(&stage.join("a.md"), |w| writeln!(w, "a"))?;
             Err::<(), _>(Error::Numerical("the plot failed".into()))
         });
@@ -518,17 +560,20 @@ mod tests {
         );
 
         std::fs::create_dir_all(report.join("plots")).unwrap();
-        std::fs::write(report.join("a.md"), "old").unwrap();
+        std::fs::write(report.join("a.md"), "# a report").unwrap();
         std::fs::write(report.join("plots/keep.png"), "kept").unwrap();
-        let failed = write_folder(&report, "a.md", "--out", |stage| {
+        let failed = write_folder(&report, MARK, "--out", |stage| {
             write_atomic(&stage.join("a.md"), |w| writeln!(w, "new"))?;
             Err::<(), _>(Error::Numerical("the plot failed".into()))
         });
         assert!(failed.is_err());
-        assert_eq!(std::fs::read_to_string(report.join("a.md")).unwrap(), "old");
+        assert_eq!(
+            std::fs::read_to_string(report.join("a.md")).unwrap(),
+            "# a report"
+        );
         assert!(leftovers(&report).is_empty());
 
-        write_folder(&report, "a.md", "--out", |stage| {
+        write_folder(&report, MARK, "--out", |stage| {
             write_atomic(&stage.join("a.md"), |w| writeln!(w, "new"))?;
             write_atomic(&stage.join("plots/b.png"), |w| writeln!(w, "b"))
         })
@@ -560,7 +605,7 @@ mod tests {
         std::fs::create_dir_all(report.join("cache")).unwrap();
         std::fs::create_dir_all(&outside).unwrap();
         for (file, text) in [
-            ("report.md", "old"),
+            ("report.md", "# a report"),
             ("old.csv", "old"),
             ("notes.txt", "mine"),
             ("plots/old.png", "old"),
@@ -571,7 +616,7 @@ mod tests {
         }
         std::fs::write(outside.join("data.npy"), "theirs").unwrap();
         std::os::unix::fs::symlink(outside.join("data.npy"), report.join("linked.npy")).unwrap();
-        write_folder(&report, "report.md", "--out", |stage| {
+        write_folder(&report, REPORT, "--out", |stage| {
             write_atomic(&stage.join("report.md"), |w| writeln!(w, "new"))?;
             write_atomic(&stage.join("plots/kept.png"), |w| writeln!(w, "new"))
         })
@@ -591,6 +636,34 @@ mod tests {
         assert!(leftovers(&report).is_empty());
     }
 
+    /// Pruning never reaches through a link into a folder the report does not own: a linked `plots`
+    /// keeps its foreign pictures, and takes the new one.
+    #[cfg(unix)]
+    #[test]
+    fn pruning_leaves_a_linked_folders_files_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let report = dir.path().join("report");
+        let shared = dir.path().join("shared");
+        std::fs::create_dir_all(&report).unwrap();
+        std::fs::create_dir_all(&shared).unwrap();
+        std::fs::write(report.join("report.md"), "# a report").unwrap();
+        std::fs::write(shared.join("theirs.png"), "theirs").unwrap();
+        std::os::unix::fs::symlink(&shared, report.join("plots")).unwrap();
+        write_folder(&report, REPORT, "--out", |stage| {
+            write_atomic(&stage.join("report.md"), |w| writeln!(w, "# a report"))?;
+            write_atomic(&stage.join("plots/new.png"), |w| writeln!(w, "new"))
+        })
+        .unwrap();
+        assert_eq!(
+            std::fs::read_to_string(shared.join("theirs.png")).unwrap(),
+            "theirs"
+        );
+        assert_eq!(
+            std::fs::read_to_string(shared.join("new.png")).unwrap(),
+            "new\n"
+        );
+    }
+
     /// A folder of other files (no earlier report in it) is refused with a usage error naming it, and
     /// nothing in it changes; an empty folder, or one holding only a killed run's temporary folder,
     /// takes a report.
@@ -600,7 +673,7 @@ mod tests {
         let folder = dir.path().join("sources");
         std::fs::create_dir_all(&folder).unwrap();
         std::fs::write(folder.join("data.npy"), "mine").unwrap();
-        let e = write_folder(&folder, "report.md", "--out", |stage| {
+        let e = write_folder(&folder, REPORT, "--out", |stage| {
             write_atomic(&stage.join("report.md"), |w| writeln!(w, "new"))
         })
         .unwrap_err();
@@ -616,10 +689,21 @@ mod tests {
         );
         assert!(!folder.join("report.md").exists());
         assert!(leftovers(&folder).is_empty());
+        // A report.md that is not this tool's (another first line) marks no earlier report.
+        std::fs::write(folder.join("report.md"), "# Our quarterly report").unwrap();
+        let e = write_folder(&folder, REPORT, "--out", |stage| {
+            write_atomic(&stage.join("report.md"), |w| writeln!(w, "# a report"))
+        })
+        .unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert_eq!(
+            std::fs::read_to_string(folder.join("report.md")).unwrap(),
+            "# Our quarterly report"
+        );
 
         let empty = dir.path().join("empty");
         std::fs::create_dir_all(empty.join(".anisospec-killed")).unwrap();
-        write_folder(&empty, "report.md", "--out", |stage| {
+        write_folder(&empty, REPORT, "--out", |stage| {
             write_atomic(&stage.join("report.md"), |w| writeln!(w, "new"))
         })
         .unwrap();
@@ -646,8 +730,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let report = dir.path().join("report");
         std::fs::create_dir_all(report.join("z.md")).unwrap();
-        std::fs::write(report.join("a.md"), "an earlier report").unwrap();
-        let e = write_folder(&report, "a.md", "--out", |stage| {
+        std::fs::write(report.join("a.md"), "# a report").unwrap();
+        let e = write_folder(&report, MARK, "--out", |stage| {
             write_atomic(&stage.join("a.md"), |w| writeln!(w, "a"))?;
             write_atomic(&stage.join("z.md"), |w| writeln!(w, "z"))
         })
@@ -660,7 +744,7 @@ mod tests {
         );
         assert_eq!(
             std::fs::read_to_string(report.join("a.md")).unwrap(),
-            "an earlier report"
+            "# a report"
         );
         assert!(leftovers(&report).is_empty());
 
@@ -700,8 +784,8 @@ mod tests {
         let report = dir.path().join("report");
         std::fs::create_dir_all(&report).unwrap();
         std::os::unix::fs::symlink(elsewhere.path(), report.join("plots")).unwrap();
-        std::fs::write(report.join("a.md"), "an earlier report").unwrap();
-        write_folder(&report, "a.md", "--out", |stage| {
+        std::fs::write(report.join("a.md"), "# a report").unwrap();
+        write_folder(&report, MARK, "--out", |stage| {
             write_atomic(&stage.join("plots/a.png"), |w| writeln!(w, "a"))
         })
         .unwrap();

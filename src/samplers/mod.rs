@@ -213,6 +213,17 @@ fn edit_distance(a: &str, b: &str) -> usize {
     d[a.len() * w + b.len()]
 }
 
+/// A pairing name's prefix and inner 2D name: `padded-mj` → `("padded", "mj")`, whether or not the
+/// inner name exists.
+fn pairing_parts(name: &str) -> Option<(&'static str, &str)> {
+    [Pairing::Padded, Pairing::Xuyv].into_iter().find_map(|p| {
+        Some((
+            p.prefix(),
+            name.strip_prefix(p.prefix())?.strip_prefix('-')?,
+        ))
+    })
+}
+
 /// For the 2D name inside `padded-NAME` / `xuyv-NAME`: empty if it is a 2D sampler, else a clause
 /// saying it is not one, with the closest 2D name and the list.
 fn unknown_inner(inner: &str) -> String {
@@ -280,10 +291,7 @@ pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
             return Ok(s);
         }
         // A pairing family is 4D whatever its 2D name; say so first, then whether the name exists.
-        if let Some((prefix, inner)) = ["padded", "xuyv"]
-            .into_iter()
-            .find_map(|p| Some((p, name.strip_prefix(p)?.strip_prefix('-')?)))
-        {
+        if let Some((prefix, inner)) = pairing_parts(name) {
             return Err(Error::Usage(format!(
                 "sampler '{name}' makes 4D sets ({prefix}-NAME pairs two 2D sets), but 2D sets are asked here; ask for 4D (--dims 4 in sample and spectrum, a 4D integrand in variance and converge){}",
                 unknown_inner(inner)
@@ -313,10 +321,7 @@ pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
                 "sampler '{name}' is 2D only; in 4D use padded-{name} (xy and uv) or xuyv-{name} (xu and yv)"
             )));
         }
-        if let Some((prefix, inner)) = ["padded", "xuyv"]
-            .into_iter()
-            .find_map(|p| Some((p, name.strip_prefix(p)?.strip_prefix('-')?)))
-        {
+        if let Some((prefix, inner)) = pairing_parts(name) {
             return Err(Error::Usage(format!(
                 "sampler '{name}': {prefix}-NAME needs a 2D sampler NAME{}",
                 unknown_inner(inner)

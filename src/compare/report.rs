@@ -485,7 +485,10 @@ fn write_markdown(
             w,
             "`convergence.csv` and `robustness.csv` hold every measured number above (gains and local slopes are ratios of them); `mse.npy`, `mse_stderr.npy`, `n.npy` and \
              `seconds_per_estimate.npy` are arrays [integrand, sampler, N] in the order of the tables; \
-             `spectra/*.npy` are [projection (xy, uv, xu, yv), K, K]."
+             `spectra/*.npy` are [projection (xy, uv, xu, yv), K, K]. `{}` lists the files of this \
+             report: the next report written to this folder removes those it does not write again, \
+             and nothing else.",
+            crate::output::MANIFEST
         )
     })
 }

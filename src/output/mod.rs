@@ -318,11 +318,14 @@ fn read_manifest(dest: &Path) -> Result<Vec<PathBuf>> {
         .collect())
 }
 
-/// Writes the [`MANIFEST`] of the report whose files and folders under `dest` are `written`.
+/// Writes the [`MANIFEST`] of the report whose files and folders under `dest` are `written`, sorted
+/// (the same report gives the same bytes).
 fn write_manifest(dest: &Path, written: &[PathBuf]) -> Result<()> {
     write_atomic(&dest.join(MANIFEST), |w| {
         writeln!(w, "{MANIFEST_HEADER}")?;
-        for path in written {
+        let mut sorted: Vec<&PathBuf> = written.iter().collect();
+        sorted.sort();
+        for path in sorted {
             let Ok(rel) = path.strip_prefix(dest) else {
                 continue;
             };

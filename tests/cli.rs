@@ -327,6 +327,49 @@ fn extreme_values_are_refused() {
     }
 }
 
+/// A number the user gave is echoed in short form: a shear of 1e-300 in the sampler's label, an eps
+/// of 1e-300 in the refusal, not as 300 digits.
+#[test]
+fn tiny_numbers_are_echoed_in_short_form() {
+    let (_dir, out) = tmp("s.npy");
+    let o = out.to_str().unwrap();
+    let run = anisospec(&[
+        "sample",
+        "--sampler",
+        "padded-mj",
+        "--dims",
+        "4",
+        "-n",
+        "16",
+        "--shear",
+        "1e-300,0.5",
+        "-o",
+        o,
+    ]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    assert!(
+        err.contains("padded-mj+shear(1e-300,0.5,transported)"),
+        "{err}"
+    );
+    let (_dir2, png) = tmp("s.png");
+    rejects(
+        &[
+            "spectrum",
+            "--sampler",
+            "random",
+            "-n",
+            "16",
+            "--eps",
+            "1e-300",
+            "-o",
+            png.to_str().unwrap(),
+        ],
+        "NUFFT tolerance 1e-300 is out of range",
+        &png,
+    );
+}
+
 /// converge's CSV quotes sampler names, which hold commas once sheared: every row has the header's
 /// eleven fields.
 #[test]

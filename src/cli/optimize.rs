@@ -134,7 +134,7 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
     if !(args.tol.is_finite() && args.tol >= 0.0) {
         return Err(Error::Usage(format!(
             "--tol {}: give a finite number >= 0",
-            args.tol
+            crate::error::number(args.tol)
         )));
     }
     if !args.exact {
@@ -143,7 +143,7 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
     if !(args.strat_radius.is_finite() && args.strat_radius >= 0.0) {
         return Err(Error::Usage(format!(
             "--strat-radius {}: give a finite radius >= 0",
-            args.strat_radius
+            crate::error::number(args.strat_radius)
         )));
     }
     Ok(())

@@ -1797,6 +1797,31 @@ fn degenerate_lattice_generators_are_refused() {
     );
 }
 
+/// converge measures each sampler once: a sampler listed twice, in one list or in two flags, is
+/// refused before any work (no table printed, no CSV).
+#[test]
+fn converge_refuses_a_sampler_listed_twice() {
+    let (_dir, csv) = tmp("c.csv");
+    let c = csv.to_str().unwrap();
+    for samplers in [
+        vec!["--sampler", "mj,mj"],
+        vec!["--sampler", "jittered,mj, mj"],
+        vec!["--sampler", "mj", "--sampler", "mj"],
+    ] {
+        let mut args = vec!["converge", "--integrand", "disc", "-n", "16,64", "-o", c];
+        args.extend(&samplers);
+        rejects(
+            &args,
+            "--sampler lists mj twice; give each sampler once",
+            &csv,
+        );
+        assert!(
+            anisospec(&args).stdout.is_empty(),
+            "{args:?} printed a table"
+        );
+    }
+}
+
 /// A point count that is not a positive integer is named as such (not taken for an unknown flag), in
 /// every command that takes one; a list of N that repeats one is refused.
 #[test]

@@ -1708,6 +1708,56 @@ fn c_headers_of_two_tables_live_in_one_file() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
+/// An output's extension is matched in any case, and the file is written at exactly the path given:
+/// `-o T.NPY` writes `T.NPY` (with its companions beside it), never `T.npy`.
+#[test]
+fn outputs_keep_the_case_of_their_extension() {
+    let dir = tempfile::tempdir().unwrap();
+    let names_in = |sub: &str| {
+        let mut names: Vec<String> = std::fs::read_dir(dir.path().join(sub))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    };
+    let cases: [(&str, Vec<&str>, Vec<&str>); 3] = [
+        (
+            "optimize",
+            vec![
+                "optimize",
+                "--target",
+                "targets/blue-noise.toml",
+                "-n",
+                "16",
+                "--max-iters",
+                "3",
+            ],
+            vec!["T.NPY", "T.h", "T.json", "T.log.csv", "T.txt"],
+        ),
+        (
+            "sample",
+            vec!["sample", "--sampler", "mj", "-n", "16"],
+            vec!["T.NPY"],
+        ),
+        ("oracle", vec!["oracle"], vec!["T.NPY", "T.exr"]),
+    ];
+    for (sub, mut args, written) in cases {
+        std::fs::create_dir(dir.path().join(sub)).unwrap();
+        let out = dir.path().join(sub).join("T.NPY");
+        args.extend(["-o", out.to_str().unwrap()]);
+        let o = anisospec(&args);
+        assert!(
+            o.status.success(),
+            "{sub}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert_eq!(names_in(sub), written, "{sub}");
+    }
+    let table = anisospec::points::io::read_points(&dir.path().join("optimize/T.NPY")).unwrap();
+    assert_eq!((table.sets(), table.n(), table.dims()), (1, 16, 2));
+}
+
 /// `optimize` without --seed uses seed 1, as every other command: the same table as --seed 1, another
 /// than --seed 0, and the sidecar says 1.
 #[test]

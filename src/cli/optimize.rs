@@ -153,9 +153,13 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
 pub fn run(args: &OptimizeArgs) -> Result<()> {
     check_args(args)?;
     let target = Target::load(&args.target)?;
-    let outputs: Vec<PathBuf> = ["npy", "txt", "h", "json", "log.csv"]
-        .iter()
-        .map(|e| args.output.with_extension(e))
+    // The table at -o as given (`t.NPY` stays `t.NPY`), the other files beside it.
+    let outputs: Vec<PathBuf> = std::iter::once(args.output.clone())
+        .chain(
+            ["txt", "h", "json", "log.csv"]
+                .iter()
+                .map(|e| args.output.with_extension(e)),
+        )
         .collect();
     let mut inputs = vec![args.target.clone()];
     if let Target::Image(img) = &target {

@@ -82,8 +82,10 @@ pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
         crate::output::image::write_png(&staged(png), side, side, 1, &pixels)
     })?;
     println!(
-        "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {} (.npy, .exr)",
+        "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {}, {} and {}",
         proj.name(),
+        npy.display(),
+        exr.display(),
         png.display()
     );
     Ok(())

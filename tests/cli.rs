@@ -1758,6 +1758,32 @@ fn outputs_keep_the_case_of_their_extension() {
     assert_eq!((table.sets(), table.n(), table.dims()), (1, 16, 2));
 }
 
+/// A count of one is spoken in the singular: "1 set", "1 realization", not "1 sets".
+#[test]
+fn counts_of_one_are_singular() {
+    let (dir, pts) = tmp("one.npy");
+    let p = pts.to_str().unwrap();
+    let o = anisospec(&["sample", "--sampler", "mj", "-n", "16", "-o", p]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("wrote 1 set of 16 2D points"), "{err}");
+    let spec = dir.path().join("s.npy");
+    let s = spec.to_str().unwrap();
+    let o = anisospec(&["spectrum", "--input", p, "--res", "8", "-o", s]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("spectrum of 1 realization of 16 points"),
+        "{err}"
+    );
+    std::fs::remove_file(&spec).unwrap();
+    rejects(
+        &["spectrum", "--input", p, "--realizations", "2", "-o", s],
+        "holds 1 set; ask for at most 1",
+        &spec,
+    );
+}
+
 /// `optimize` without --seed uses seed 1, as every other command: the same table as --seed 1, another
 /// than --seed 0, and the sidecar says 1.
 #[test]

@@ -167,6 +167,15 @@ pub fn sibling_outputs(output: &Path, exts: &[&str]) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
+/// `n` and `noun`, in the plural (`noun` and an `s`) unless `n` is 1: `1 set`, `8 sets`.
+pub fn counted(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
 /// `a, b and c` (with `word` = "and").
 fn spoken_list(items: &[String], word: &str) -> String {
     match items {

@@ -282,12 +282,18 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     for f in &fits {
         match f.variance_ratio {
             Some(v) => eprintln!(
-                "{}: predicted variance {v:.4e} of random sampling's (over the fit radius), over {} sets",
-                f.proj, f.sets
+                "{}: predicted variance {v:.4e} of random sampling's (over the fit radius), over {}",
+                f.proj,
+                super::counted(f.sets, "set")
             ),
             None => eprintln!(
-                "{}: dark mean P {:.4} over {} cells, annular error max {:.4} (rms {:.4}) over {} sets",
-                f.proj, f.dark_mean, f.dark_cells, f.annular_max_error, f.annular_rms_error, f.sets
+                "{}: dark mean P {:.4} over {}, annular error max {:.4} (rms {:.4}) over {}",
+                f.proj,
+                f.dark_mean,
+                super::counted(f.dark_cells, "cell"),
+                f.annular_max_error,
+                f.annular_rms_error,
+                super::counted(f.sets, "set")
             ),
         }
     }
@@ -301,9 +307,9 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         );
     }
     eprintln!(
-        "wrote {} ({} sets of {} points in {}D, {:.1} s)",
+        "wrote {} ({} of {} points in {}D, {:.1} s)",
         outputs[0].display(),
-        args.sets,
+        super::counted(args.sets, "set"),
         args.n,
         args.dims,
         seconds

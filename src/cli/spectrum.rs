@@ -138,9 +138,9 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
             let sets = match args.realizations {
                 Some(r) if r > sets.sets() => {
                     return Err(Error::Usage(format!(
-                        "--realizations {r} but {} holds {} sets; ask for at most {}",
+                        "--realizations {r} but {} holds {}; ask for at most {}",
                         path.display(),
-                        sets.sets(),
+                        super::counted(sets.sets(), "set"),
                         sets.sets()
                     )))
                 }
@@ -174,9 +174,9 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
         Ok(())
     })?;
     eprintln!(
-        "spectrum of {} realizations of {} points on a {}x{} grid written to {}",
-        spec.realizations,
-        spec.n,
+        "spectrum of {} of {} on a {}x{} grid written to {}",
+        super::counted(spec.realizations, "realization"),
+        super::counted(spec.n, "point"),
         spec.res,
         spec.res,
         args.output

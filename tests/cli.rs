@@ -2220,6 +2220,58 @@ fn counts_above_their_limits_are_refused() {
             &png,
         );
     }
+    // Each flag within its own limit, the two together far above the limit of their product: refused
+    // before the scene is read or a ray cast (the refusal returns; the work would take days).
+    let casts = anisospec::cli::pixel_spectrum::MAX_RAY_CASTS.to_string();
+    for (res, average) in [("8192", "256"), ("8192", "8"), ("2048", "32")] {
+        rejects(
+            &[
+                "pixel-spectrum",
+                "--pixel",
+                "33,30",
+                "--res",
+                res,
+                "--average",
+                average,
+                "-o",
+                png.to_str().unwrap(),
+            ],
+            &format!("ray casts, above the limit of {casts}"),
+            &png,
+        );
+    }
+    // A point file of more sets than the realization limit is not averaged whole.
+    let many = dir.path().join("many.npy");
+    let sets = anisospec::stats::MAX_REALIZATIONS + 1;
+    let bytes = npy_bytes(&format!("({sets}, 1, 2)"), false, &vec![0.25; 2 * sets]);
+    std::fs::write(&many, &bytes).unwrap();
+    let m = many.to_str().unwrap();
+    rejects(
+        &["spectrum", "--input", m, "--res", "8", "-o", o],
+        &format!("holds {sets} sets, above the largest realization count, 1000000; average its first 1000000 with --realizations 1000000"),
+        &out,
+    );
+    let run = anisospec(&[
+        "spectrum",
+        "--input",
+        m,
+        "--res",
+        "8",
+        "--realizations",
+        "2",
+        "-o",
+        o,
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert_eq!(
+        std::fs::read(&many).unwrap(),
+        bytes,
+        "the input is untouched"
+    );
 }
 
 /// The same limits in a compare config, caught by `validate()` before any work.
@@ -2254,11 +2306,12 @@ fn bounded_flags_state_their_limits_in_help() {
     let realizations = anisospec::stats::MAX_REALIZATIONS.to_string();
     let cones = anisospec::spectrum::profiles::MAX_CONES.to_string();
     let average = anisospec::cli::pixel_spectrum::MAX_AVERAGE.to_string();
+    let casts = anisospec::cli::pixel_spectrum::MAX_RAY_CASTS.to_string();
     for (cmd, limits) in [
         ("spectrum", vec![&realizations, &cones]),
         ("converge", vec![&realizations]),
         ("variance", vec![&realizations, &cones]),
-        ("pixel-spectrum", vec![&average]),
+        ("pixel-spectrum", vec![&average, &casts]),
         ("gallery", vec![&realizations]),
     ] {
         let o = anisospec(&[cmd, "--help"]);

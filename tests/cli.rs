@@ -20,7 +20,36 @@ fn tmp(name: &str) -> (tempfile::TempDir, PathBuf) {
 
 /// Runs `args`, expects exit code 2 with a message containing `needle`, and no file at `out`.
 fn rejects(args: &[&str], needle: &str, out: &Path) {
-    let o = anisospec(args);
+    refused(&anisospec(args), args, needle, out);
+}
+
+/// The address space, in KiB, [`rejects_in_small_memory`] gives the binary: 256 MiB, far below the
+/// gigabytes the refused sizes would take, and several times what a refusal needs.
+const SMALL_MEMORY_KIB: u64 = 256 * 1024;
+
+/// Runs the binary with `args` under `ulimit -v` of [`SMALL_MEMORY_KIB`] (Linux enforces it on every
+/// allocation).
+fn anisospec_in_small_memory(args: &[&str]) -> std::process::Output {
+    Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {SMALL_MEMORY_KIB} && exec \"$0\" \"$@\""
+        ))
+        .arg(env!("CARGO_BIN_EXE_anisospec"))
+        .args(args)
+        .output()
+        .expect("sh runs")
+}
+
+/// [`rejects`] in a small address space: a refusal that came only after allocating the refused size
+/// would abort on the failed allocation instead of exiting with 2.
+fn rejects_in_small_memory(args: &[&str], needle: &str, out: &Path) {
+    refused(&anisospec_in_small_memory(args), args, needle, out);
+}
+
+/// Checks that the run `o` of `args` exited with 2 and a message containing `needle`, and left no
+/// file at `out`.
+fn refused(o: &std::process::Output, args: &[&str], needle: &str, out: &Path) {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(
         o.status.code(),
@@ -565,17 +594,28 @@ fn npy_headers_that_overflow_or_lie_are_rejected() {
     }
 }
 
+/// Sizes above the coordinate limit are refused before their points are allocated: each refusal runs
+/// in an address space far smaller than the refused size, where an allocation first would abort.
 #[test]
 fn sizes_above_the_coordinate_limit_are_refused_at_once() {
     let (dir, out) = tmp("big.npy");
     let o = out.to_str().unwrap();
-    let start = std::time::Instant::now();
-    rejects(
+    // The limit bites: a size within the coordinate limit (2^26 coordinates, 512 MiB) that the small
+    // address space cannot hold fails, with no refusal and no file.
+    let big =
+        anisospec_in_small_memory(&["sample", "--sampler", "random", "-n", "33554432", "-o", o]);
+    assert!(
+        !big.status.success() && big.status.code() != Some(2),
+        "{:?}: {}",
+        big.status,
+        String::from_utf8_lossy(&big.stderr)
+    );
+    assert!(!out.exists());
+    rejects_in_small_memory(
         &["sample", "--sampler", "random", "-n", "1000000000", "-o", o],
         "2000000000 coordinates (14.9 GiB) is above the limit",
         &out,
     );
-    assert!(start.elapsed().as_secs() < 10, "{:?}", start.elapsed());
     let csv = dir.path().join("big.csv");
     let huge = [
         ("sample --sampler random -n 18446744073709551615", &out),
@@ -599,7 +639,7 @@ fn sizes_above_the_coordinate_limit_are_refused_at_once() {
     for (command, file) in huge {
         let mut args: Vec<&str> = command.split_whitespace().collect();
         args.extend(["-o", file.to_str().unwrap()]);
-        rejects(&args, "smaller N or fewer sets", file);
+        rejects_in_small_memory(&args, "smaller N or fewer sets", file);
     }
 }
 

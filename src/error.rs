@@ -80,3 +80,44 @@ impl Error {
 
 /// Result with the crate's [`Error`].
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// `v` as a message or a label shows a number the user gave: Rust's shortest form that reads back as
+/// the same `f64` (`0.5`, `-3`, `inf`), in scientific notation (`1e-300`, `2.5e20`) where the plain
+/// form would run to many zeros, below 1e-4 or from 1e16 in magnitude (where `{:?}` switches too).
+pub fn number(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e16).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::number;
+
+    #[test]
+    fn numbers_are_short_and_read_back_exactly() {
+        for (v, text) in [
+            (0.5, "0.5"),
+            (-3.0, "-3"),
+            (0.0, "0"),
+            (1e-4, "0.0001"),
+            (1e-300, "1e-300"),
+            (-2.5e20, "-2.5e20"),
+            (f64::INFINITY, "inf"),
+        ] {
+            assert_eq!(number(v), text);
+        }
+        for v in [
+            0.1 + 0.2,
+            1e-5 / 3.0,
+            1e300 / 7.0,
+            f64::MIN_POSITIVE,
+            -f64::MAX,
+        ] {
+            assert!(number(v).len() <= 24, "{v:e}: {}", number(v));
+            assert_eq!(number(v).parse::<f64>().unwrap(), v);
+        }
+    }
+}

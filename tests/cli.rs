@@ -20,7 +20,36 @@ fn tmp(name: &str) -> (tempfile::TempDir, PathBuf) {
 
 /// Runs `args`, expects exit code 2 with a message containing `needle`, and no file at `out`.
 fn rejects(args: &[&str], needle: &str, out: &Path) {
-    let o = anisospec(args);
+    refused(&anisospec(args), args, needle, out);
+}
+
+/// The address space, in KiB, [`rejects_in_small_memory`] gives the binary: 256 MiB, far below the
+/// gigabytes the refused sizes would take, and several times what a refusal needs.
+const SMALL_MEMORY_KIB: u64 = 256 * 1024;
+
+/// Runs the binary with `args` under `ulimit -v` of [`SMALL_MEMORY_KIB`] (Linux enforces it on every
+/// allocation).
+fn anisospec_in_small_memory(args: &[&str]) -> std::process::Output {
+    Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {SMALL_MEMORY_KIB} && exec \"$0\" \"$@\""
+        ))
+        .arg(env!("CARGO_BIN_EXE_anisospec"))
+        .args(args)
+        .output()
+        .expect("sh runs")
+}
+
+/// [`rejects`] in a small address space: a refusal that came only after allocating the refused size
+/// would abort on the failed allocation instead of exiting with 2.
+fn rejects_in_small_memory(args: &[&str], needle: &str, out: &Path) {
+    refused(&anisospec_in_small_memory(args), args, needle, out);
+}
+
+/// Checks that the run `o` of `args` exited with 2 and a message containing `needle`, and left no
+/// file at `out`.
+fn refused(o: &std::process::Output, args: &[&str], needle: &str, out: &Path) {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(
         o.status.code(),
@@ -327,6 +356,49 @@ fn extreme_values_are_refused() {
     }
 }
 
+/// A number the user gave is echoed in short form: a shear of 1e-300 in the sampler's label, an eps
+/// of 1e-300 in the refusal, not as 300 digits.
+#[test]
+fn tiny_numbers_are_echoed_in_short_form() {
+    let (_dir, out) = tmp("s.npy");
+    let o = out.to_str().unwrap();
+    let run = anisospec(&[
+        "sample",
+        "--sampler",
+        "padded-mj",
+        "--dims",
+        "4",
+        "-n",
+        "16",
+        "--shear",
+        "1e-300,0.5",
+        "-o",
+        o,
+    ]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    assert!(
+        err.contains("padded-mj+shear(1e-300,0.5,transported)"),
+        "{err}"
+    );
+    let (_dir2, png) = tmp("s.png");
+    rejects(
+        &[
+            "spectrum",
+            "--sampler",
+            "random",
+            "-n",
+            "16",
+            "--eps",
+            "1e-300",
+            "-o",
+            png.to_str().unwrap(),
+        ],
+        "NUFFT tolerance 1e-300 is out of range",
+        &png,
+    );
+}
+
 /// converge's CSV quotes sampler names, which hold commas once sheared: every row has the header's
 /// eleven fields.
 #[test]
@@ -522,17 +594,28 @@ fn npy_headers_that_overflow_or_lie_are_rejected() {
     }
 }
 
+/// Sizes above the coordinate limit are refused before their points are allocated: each refusal runs
+/// in an address space far smaller than the refused size, where an allocation first would abort.
 #[test]
 fn sizes_above_the_coordinate_limit_are_refused_at_once() {
     let (dir, out) = tmp("big.npy");
     let o = out.to_str().unwrap();
-    let start = std::time::Instant::now();
-    rejects(
+    // The limit bites: a size within the coordinate limit (2^26 coordinates, 512 MiB) that the small
+    // address space cannot hold fails, with no refusal and no file.
+    let big =
+        anisospec_in_small_memory(&["sample", "--sampler", "random", "-n", "33554432", "-o", o]);
+    assert!(
+        !big.status.success() && big.status.code() != Some(2),
+        "{:?}: {}",
+        big.status,
+        String::from_utf8_lossy(&big.stderr)
+    );
+    assert!(!out.exists());
+    rejects_in_small_memory(
         &["sample", "--sampler", "random", "-n", "1000000000", "-o", o],
         "2000000000 coordinates (14.9 GiB) is above the limit",
         &out,
     );
-    assert!(start.elapsed().as_secs() < 10, "{:?}", start.elapsed());
     let csv = dir.path().join("big.csv");
     let huge = [
         ("sample --sampler random -n 18446744073709551615", &out),
@@ -556,7 +639,7 @@ fn sizes_above_the_coordinate_limit_are_refused_at_once() {
     for (command, file) in huge {
         let mut args: Vec<&str> = command.split_whitespace().collect();
         args.extend(["-o", file.to_str().unwrap()]);
-        rejects(&args, "smaller N or fewer sets", file);
+        rejects_in_small_memory(&args, "smaller N or fewer sets", file);
     }
 }
 
@@ -1650,6 +1733,82 @@ fn c_headers_of_two_tables_live_in_one_file() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
+/// An output's extension is matched in any case, and the file is written at exactly the path given:
+/// `-o T.NPY` writes `T.NPY` (with its companions beside it), never `T.npy`.
+#[test]
+fn outputs_keep_the_case_of_their_extension() {
+    let dir = tempfile::tempdir().unwrap();
+    let names_in = |sub: &str| {
+        let mut names: Vec<String> = std::fs::read_dir(dir.path().join(sub))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    };
+    let cases: [(&str, Vec<&str>, Vec<&str>); 3] = [
+        (
+            "optimize",
+            vec![
+                "optimize",
+                "--target",
+                "targets/blue-noise.toml",
+                "-n",
+                "16",
+                "--max-iters",
+                "3",
+            ],
+            vec!["T.NPY", "T.h", "T.json", "T.log.csv", "T.txt"],
+        ),
+        (
+            "sample",
+            vec!["sample", "--sampler", "mj", "-n", "16"],
+            vec!["T.NPY"],
+        ),
+        ("oracle", vec!["oracle"], vec!["T.NPY", "T.exr"]),
+    ];
+    for (sub, mut args, written) in cases {
+        std::fs::create_dir(dir.path().join(sub)).unwrap();
+        let out = dir.path().join(sub).join("T.NPY");
+        args.extend(["-o", out.to_str().unwrap()]);
+        let o = anisospec(&args);
+        assert!(
+            o.status.success(),
+            "{sub}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert_eq!(names_in(sub), written, "{sub}");
+    }
+    let table = anisospec::points::io::read_points(&dir.path().join("optimize/T.NPY")).unwrap();
+    assert_eq!((table.sets(), table.n(), table.dims()), (1, 16, 2));
+}
+
+/// A count of one is spoken in the singular: "1 set", "1 realization", not "1 sets".
+#[test]
+fn counts_of_one_are_singular() {
+    let (dir, pts) = tmp("one.npy");
+    let p = pts.to_str().unwrap();
+    let o = anisospec(&["sample", "--sampler", "mj", "-n", "16", "-o", p]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("wrote 1 set of 16 2D points"), "{err}");
+    let spec = dir.path().join("s.npy");
+    let s = spec.to_str().unwrap();
+    let o = anisospec(&["spectrum", "--input", p, "--res", "8", "-o", s]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("spectrum of 1 realization of 16 points"),
+        "{err}"
+    );
+    std::fs::remove_file(&spec).unwrap();
+    rejects(
+        &["spectrum", "--input", p, "--realizations", "2", "-o", s],
+        "holds 1 set; ask for at most 1",
+        &spec,
+    );
+}
+
 /// `optimize` without --seed uses seed 1, as every other command: the same table as --seed 1, another
 /// than --seed 0, and the sidecar says 1.
 #[test]
@@ -1737,6 +1896,31 @@ fn degenerate_lattice_generators_are_refused() {
         "{}",
         String::from_utf8_lossy(&ok.stderr)
     );
+}
+
+/// converge measures each sampler once: a sampler listed twice, in one list or in two flags, is
+/// refused before any work (no table printed, no CSV).
+#[test]
+fn converge_refuses_a_sampler_listed_twice() {
+    let (_dir, csv) = tmp("c.csv");
+    let c = csv.to_str().unwrap();
+    for samplers in [
+        vec!["--sampler", "mj,mj"],
+        vec!["--sampler", "jittered,mj, mj"],
+        vec!["--sampler", "mj", "--sampler", "mj"],
+    ] {
+        let mut args = vec!["converge", "--integrand", "disc", "-n", "16,64", "-o", c];
+        args.extend(&samplers);
+        rejects(
+            &args,
+            "--sampler lists mj twice; give each sampler once",
+            &csv,
+        );
+        assert!(
+            anisospec(&args).stdout.is_empty(),
+            "{args:?} printed a table"
+        );
+    }
 }
 
 /// A point count that is not a positive integer is named as such (not taken for an unknown flag), in
@@ -2061,6 +2245,58 @@ fn counts_above_their_limits_are_refused() {
             &png,
         );
     }
+    // Each flag within its own limit, the two together far above the limit of their product: refused
+    // before the scene is read or a ray cast (the refusal returns; the work would take days).
+    let casts = anisospec::cli::pixel_spectrum::MAX_RAY_CASTS.to_string();
+    for (res, average) in [("8192", "256"), ("8192", "8"), ("2048", "32")] {
+        rejects(
+            &[
+                "pixel-spectrum",
+                "--pixel",
+                "33,30",
+                "--res",
+                res,
+                "--average",
+                average,
+                "-o",
+                png.to_str().unwrap(),
+            ],
+            &format!("ray casts, above the limit of {casts}"),
+            &png,
+        );
+    }
+    // A point file of more sets than the realization limit is not averaged whole.
+    let many = dir.path().join("many.npy");
+    let sets = anisospec::stats::MAX_REALIZATIONS + 1;
+    let bytes = npy_bytes(&format!("({sets}, 1, 2)"), false, &vec![0.25; 2 * sets]);
+    std::fs::write(&many, &bytes).unwrap();
+    let m = many.to_str().unwrap();
+    rejects(
+        &["spectrum", "--input", m, "--res", "8", "-o", o],
+        &format!("holds {sets} sets, above the largest realization count, 1000000; average its first 1000000 with --realizations 1000000"),
+        &out,
+    );
+    let run = anisospec(&[
+        "spectrum",
+        "--input",
+        m,
+        "--res",
+        "8",
+        "--realizations",
+        "2",
+        "-o",
+        o,
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert_eq!(
+        std::fs::read(&many).unwrap(),
+        bytes,
+        "the input is untouched"
+    );
 }
 
 /// The same limits in a compare config, caught by `validate()` before any work.
@@ -2095,11 +2331,12 @@ fn bounded_flags_state_their_limits_in_help() {
     let realizations = anisospec::stats::MAX_REALIZATIONS.to_string();
     let cones = anisospec::spectrum::profiles::MAX_CONES.to_string();
     let average = anisospec::cli::pixel_spectrum::MAX_AVERAGE.to_string();
+    let casts = anisospec::cli::pixel_spectrum::MAX_RAY_CASTS.to_string();
     for (cmd, limits) in [
         ("spectrum", vec![&realizations, &cones]),
         ("converge", vec![&realizations]),
         ("variance", vec![&realizations, &cones]),
-        ("pixel-spectrum", vec![&average]),
+        ("pixel-spectrum", vec![&average, &casts]),
         ("gallery", vec![&realizations]),
     ] {
         let o = anisospec(&[cmd, "--help"]);

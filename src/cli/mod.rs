@@ -133,9 +133,11 @@ pub fn require_extension(path: &Path, flag: &str, ext: &str, what: &str) -> Resu
 }
 
 /// The files a command writes beside one another from `-o output`, one per extension of `exts` (e.g.
-/// `out/oracle.exr` and `out/oracle.npy`). `output` may carry one of `exts` or no extension; a path
-/// with no file name, or with another extension (which would not be written), is a usage error
-/// naming the files and the fix.
+/// `out/oracle.exr` and `out/oracle.npy`). `output` may carry one of `exts`, in any case, or no
+/// extension; the file of its own extension is `output` exactly as given (`-o out/o.NPY` writes
+/// `out/o.NPY` and `out/o.exr`, as every command writes at the path it is given). A path with no file
+/// name, or with another extension (which would not be written), is a usage error naming the files
+/// and the fix.
 pub fn sibling_outputs(output: &Path, exts: &[&str]) -> Result<Vec<PathBuf>> {
     if output.file_name().is_none() {
         return Err(Error::Usage(format!(
@@ -144,8 +146,15 @@ pub fn sibling_outputs(output: &Path, exts: &[&str]) -> Result<Vec<PathBuf>> {
             exts[0]
         )));
     }
-    let files: Vec<PathBuf> = exts.iter().map(|e| output.with_extension(e)).collect();
-    if let Some(ext) = extension(output).filter(|x| !exts.contains(&x.as_str())) {
+    let own = extension(output);
+    let files: Vec<PathBuf> = exts
+        .iter()
+        .map(|e| match &own {
+            Some(x) if x == e => output.to_path_buf(),
+            _ => output.with_extension(e),
+        })
+        .collect();
+    if let Some(ext) = own.filter(|x| !exts.contains(&x.as_str())) {
         let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
         let dotted: Vec<String> = exts.iter().map(|e| format!(".{e}")).collect();
         return Err(Error::Usage(format!(
@@ -156,6 +165,15 @@ pub fn sibling_outputs(output: &Path, exts: &[&str]) -> Result<Vec<PathBuf>> {
         )));
     }
     Ok(files)
+}
+
+/// `n` and `noun`, in the plural (`noun` and an `s`) unless `n` is 1: `1 set`, `8 sets`.
+pub fn counted(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
 }
 
 /// `a, b and c` (with `word` = "and").

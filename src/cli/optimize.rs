@@ -134,7 +134,7 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
     if !(args.tol.is_finite() && args.tol >= 0.0) {
         return Err(Error::Usage(format!(
             "--tol {}: give a finite number >= 0",
-            args.tol
+            crate::error::number(args.tol)
         )));
     }
     if !args.exact {
@@ -143,7 +143,7 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
     if !(args.strat_radius.is_finite() && args.strat_radius >= 0.0) {
         return Err(Error::Usage(format!(
             "--strat-radius {}: give a finite radius >= 0",
-            args.strat_radius
+            crate::error::number(args.strat_radius)
         )));
     }
     Ok(())
@@ -153,9 +153,13 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
 pub fn run(args: &OptimizeArgs) -> Result<()> {
     check_args(args)?;
     let target = Target::load(&args.target)?;
-    let outputs: Vec<PathBuf> = ["npy", "txt", "h", "json", "log.csv"]
-        .iter()
-        .map(|e| args.output.with_extension(e))
+    // The table at -o as given (`t.NPY` stays `t.NPY`), the other files beside it.
+    let outputs: Vec<PathBuf> = std::iter::once(args.output.clone())
+        .chain(
+            ["txt", "h", "json", "log.csv"]
+                .iter()
+                .map(|e| args.output.with_extension(e)),
+        )
         .collect();
     let mut inputs = vec![args.target.clone()];
     if let Target::Image(img) = &target {
@@ -278,12 +282,18 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     for f in &fits {
         match f.variance_ratio {
             Some(v) => eprintln!(
-                "{}: predicted variance {v:.4e} of random sampling's (over the fit radius), over {} sets",
-                f.proj, f.sets
+                "{}: predicted variance {v:.4e} of random sampling's (over the fit radius), over {}",
+                f.proj,
+                super::counted(f.sets, "set")
             ),
             None => eprintln!(
-                "{}: dark mean P {:.4} over {} cells, annular error max {:.4} (rms {:.4}) over {} sets",
-                f.proj, f.dark_mean, f.dark_cells, f.annular_max_error, f.annular_rms_error, f.sets
+                "{}: dark mean P {:.4} over {}, annular error max {:.4} (rms {:.4}) over {}",
+                f.proj,
+                f.dark_mean,
+                super::counted(f.dark_cells, "cell"),
+                f.annular_max_error,
+                f.annular_rms_error,
+                super::counted(f.sets, "set")
             ),
         }
     }
@@ -297,9 +307,9 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         );
     }
     eprintln!(
-        "wrote {} ({} sets of {} points in {}D, {:.1} s)",
+        "wrote {} ({} of {} points in {}D, {:.1} s)",
         outputs[0].display(),
-        args.sets,
+        super::counted(args.sets, "set"),
         args.n,
         args.dims,
         seconds

@@ -15,6 +15,12 @@ use std::sync::Arc;
 /// a couple of minutes on two cores, while a larger M (or a mistyped one) would run for hours or more.
 pub const MAX_AVERAGE: usize = 256;
 
+/// The largest number of ray casts, `K² · M²` (`--res` K, `--average` M): 2^30, what the default
+/// K = 128 costs at the largest M, [`MAX_AVERAGE`] (a couple of minutes on two cores). Each flag's
+/// own limit allows far more together: K = 8192 with M = 256 is 2^42 casts, 4096 times as many,
+/// about a week.
+pub const MAX_RAY_CASTS: u64 = 1 << 30;
+
 /// Writes |f^(k1, k2)|^2 of one pixel's integrand for a projection, as npy, EXR and PNG.
 #[derive(clap::Args, Debug)]
 pub struct PixelSpectrumArgs {
@@ -29,11 +35,12 @@ pub struct PixelSpectrumArgs {
     #[arg(long, default_value = "xu")]
     pub proj: String,
     /// Frequency grid size K (even): the integrand is sampled on a K x K grid of cell centres and
-    /// k1, k2 run over -K/2..K/2-1.
+    /// k1, k2 run over -K/2..K/2-1. K² · M² (with M of --average) is at most 1073741824 ray casts
+    /// (2^30, e.g. K = 128 with M = 256, or K = 1024 with M = 32).
     #[arg(long, default_value_t = 128)]
     pub res: usize,
     /// The other two coordinates are averaged with an M x M midpoint grid; 1 fixes them to 1/2. At
-    /// most 256 (K² · M² ray casts in all).
+    /// most 256, and K² · M² ray casts in all at most 1073741824 (2^30).
     #[arg(long, default_value_t = 8)]
     pub average: usize,
     /// Output path; FILE.npy (float64 [K, K], P[i, j] at k1 = j - K/2, k2 = i - K/2), FILE.exr (raw
@@ -66,6 +73,16 @@ pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
             args.average
         )));
     }
+    crate::spectrum::check_res(args.res)?;
+    let casts = (args.res as u64).pow(2) * (args.average as u64).pow(2);
+    if casts > MAX_RAY_CASTS {
+        // K · M <= sqrt(MAX_RAY_CASTS) = 2^15 (exact in f64); K <= 8192 leaves at least M = 4.
+        let largest = (MAX_RAY_CASTS as f64).sqrt() as u64 / args.res as u64;
+        return Err(Error::Usage(format!(
+            "--res {} with --average {} asks for K² · M² = {casts} ray casts, above the limit of {MAX_RAY_CASTS} (2^30: K = 128 with M = 256, a couple of minutes on two cores); lower --average to {largest} or less at this --res, or lower --res",
+            args.res, args.average
+        )));
+    }
     let outputs = super::sibling_outputs(&args.output, &["npy", "exr", "png"])?;
     let inputs: Vec<std::path::PathBuf> = args.scene.iter().cloned().collect();
     let [npy, exr, png] = [&outputs[0], &outputs[1], &outputs[2]];
@@ -82,8 +99,10 @@ pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
         crate::output::image::write_png(&staged(png), side, side, 1, &pixels)
     })?;
     println!(
-        "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {} (.npy, .exr)",
+        "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {}, {} and {}",
         proj.name(),
+        npy.display(),
+        exr.display(),
         png.display()
     );
     Ok(())

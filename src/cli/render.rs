@@ -72,7 +72,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         args.sampler.as_deref().unwrap_or_default(),
     ));
     let files = crate::cli::sibling_outputs(&args.output, &["exr", "png"])?;
-    crate::output::check_outputs(&[&files[0], &files[1]], &inputs)?;
+    let (exr, png) = (&files[0], &files[1]);
+    crate::output::check_outputs(&[exr, png], &inputs)?;
     let reference_of = |what: &str| {
         let bar = crate::progress::bar(h as u64, what);
         reference_image(&scene, args.ref_count, Some(&cache), &bar)
@@ -80,12 +81,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.reference {
         let start = Instant::now();
         let r = reference_of("reference image")?;
-        let (exr, png) = write_image_pair(
-            &args.output,
-            w,
-            h,
-            &[("Y", &r.value), ("stderr", &r.stderr)],
-        )?;
+        write_image_pair(exr, png, w, h, &[("Y", &r.value), ("stderr", &r.stderr)])?;
         println!(
             "reference {w}x{h} at {} rays per pixel in {:.2} s (cached in {}); mean squared standard \
              error {:.3e}; wrote {} and {}",
@@ -119,7 +115,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         &bar,
     )?;
     let seconds = start.elapsed().as_secs_f64();
-    let (exr, png) = write_image_pair(&args.output, w, h, &[("Y", &image)])?;
+    write_image_pair(exr, png, w, h, &[("Y", &image)])?;
     let shear = if args.shear {
         format!("sheared by the oracle ({:?})", args.shear_mode).to_lowercase()
     } else {

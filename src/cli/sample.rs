@@ -43,10 +43,11 @@ pub fn run(args: &SampleArgs) -> Result<()> {
     let sets = generate_sets(sampler.as_ref(), args.n, args.sets, args.seed)?;
     write_points(&args.output, &sets)?;
     eprintln!(
-        "wrote {} sets of {} {}D points from {} to {}",
-        sets.sets(),
+        "wrote {} of {} {}D {} from {} to {}",
+        super::counted(sets.sets(), "set"),
         sets.n(),
         sets.dims(),
+        if sets.n() == 1 { "point" } else { "points" },
         sampler.name(),
         args.output.display()
     );

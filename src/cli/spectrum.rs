@@ -10,6 +10,7 @@ use crate::samplers;
 use crate::spectrum::expected::{of_sampler, of_sets, ExpectedSpectrum};
 use crate::spectrum::profiles::{radial_profile, write_radial_csv};
 use crate::spectrum::{check_res, Method};
+use crate::stats::MAX_REALIZATIONS;
 use std::path::{Path, PathBuf};
 
 /// Expected power spectrum P(k) = |Σ_j exp(−2πi k·x_j)|² / N of a sampler or a point file.
@@ -44,7 +45,8 @@ pub struct SpectrumArgs {
     #[arg(long, default_value_t = 128)]
     pub res: usize,
     /// Realizations averaged (independent sets). With --sampler, default 32; with --input, at most the
-    /// number of sets in the file (default: all of them). --stderr needs at least 2. At most 1000000.
+    /// number of sets in the file (default: all of them, so a file of more than 1000000 sets needs
+    /// this flag). --stderr needs at least 2. At most 1000000.
     #[arg(long)]
     pub realizations: Option<usize>,
     /// Use the exact O(N K²) DFT instead of the NUFFT.
@@ -138,9 +140,9 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
             let sets = match args.realizations {
                 Some(r) if r > sets.sets() => {
                     return Err(Error::Usage(format!(
-                        "--realizations {r} but {} holds {} sets; ask for at most {}",
+                        "--realizations {r} but {} holds {}; ask for at most {}",
                         path.display(),
-                        sets.sets(),
+                        super::counted(sets.sets(), "set"),
                         sets.sets()
                     )))
                 }
@@ -150,6 +152,14 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
                     sets.dims(),
                     sets.data()[..r * sets.n() * sets.dims()].to_vec(),
                 )?,
+                // As many realizations as --realizations allows: each costs a transform.
+                None if sets.sets() > MAX_REALIZATIONS => {
+                    return Err(Error::Usage(format!(
+                        "{} holds {} sets, above the largest realization count, {MAX_REALIZATIONS}; average its first {MAX_REALIZATIONS} with --realizations {MAX_REALIZATIONS}, or fewer",
+                        path.display(),
+                        sets.sets()
+                    )))
+                }
                 None if sets.sets() < 2 && args.stderr.is_some() => {
                     return Err(no_stderr(
                         &format!("{} holds one set", path.display()),
@@ -174,9 +184,9 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
         Ok(())
     })?;
     eprintln!(
-        "spectrum of {} realizations of {} points on a {}x{} grid written to {}",
-        spec.realizations,
-        spec.n,
+        "spectrum of {} of {} on a {}x{} grid written to {}",
+        super::counted(spec.realizations, "realization"),
+        super::counted(spec.n, "point"),
         spec.res,
         spec.res,
         args.output

@@ -77,7 +77,8 @@ impl PointSets {
             if !c.is_finite() || *c < 0.0 || *c > 1.0 {
                 let (s, j, d) = (i / (n * dims), (i / dims) % n, i % dims);
                 return Err(Error::Input(format!(
-                    "coordinate {d} of point {j} in set {s} is {c}; every coordinate must be a finite number in [0, 1) (the unit torus; exactly 1 is taken as 0)"
+                    "coordinate {d} of point {j} in set {s} is {}; every coordinate must be a finite number in [0, 1) (the unit torus; exactly 1 is taken as 0)",
+                    crate::error::number(*c)
                 )));
             }
             if *c == 1.0 {

@@ -246,17 +246,15 @@ pub fn mse(image: &[f64], reference: &[f64]) -> f64 {
 /// Radiance mapped to white in the PNG preview (gamma 2.2 below it, clipped above).
 pub const PNG_WHITE: f64 = 0.5;
 
-/// Writes an image as EXR (one float channel per entry of `channels`, e.g. `Y`) at `path` with its
-/// extension replaced by `exr`, and a PNG preview of the first channel beside it (`png`). Returns the
-/// two paths.
+/// Writes an image as EXR (one float channel per entry of `channels`, e.g. `Y`) at `exr_path`, and a
+/// PNG preview of the first channel at `png_path`: both or neither.
 pub fn write_image_pair(
-    path: &Path,
+    exr_path: &Path,
+    png_path: &Path,
     width: usize,
     height: usize,
     channels: &[(&str, &[f64])],
-) -> Result<(PathBuf, PathBuf)> {
-    let exr_path = path.with_extension("exr");
-    let png_path = path.with_extension("png");
+) -> Result<()> {
     let chans: Vec<(&str, Vec<f32>)> = channels
         .iter()
         .map(|(n, v)| (*n, v.iter().map(|&x| x as f32).collect()))
@@ -266,9 +264,8 @@ pub fn write_image_pair(
         .iter()
         .map(|&v| ((v / PNG_WHITE).clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0).round() as u8)
         .collect();
-    crate::output::write_group(&[&exr_path, &png_path], |staged| {
-        crate::output::image::write_exr(&staged(&exr_path), width, height, &chans)?;
-        crate::output::image::write_png(&staged(&png_path), width, height, 1, &pixels)
-    })?;
-    Ok((exr_path, png_path))
+    crate::output::write_group(&[exr_path, png_path], |staged| {
+        crate::output::image::write_exr(&staged(exr_path), width, height, &chans)?;
+        crate::output::image::write_png(&staged(png_path), width, height, 1, &pixels)
+    })
 }

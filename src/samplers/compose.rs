@@ -130,8 +130,8 @@ impl Sampler for Sheared {
         format!(
             "{}+shear({},{},{mode})",
             self.inner.name(),
-            self.sx,
-            self.sy
+            crate::error::number(self.sx),
+            crate::error::number(self.sy)
         )
     }
     fn dims(&self) -> usize {

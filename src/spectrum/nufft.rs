@@ -242,7 +242,8 @@ impl Nufft2d {
         check_res(res)?;
         if !(EPS_MIN..=EPS_MAX).contains(&eps) {
             return Err(Error::Usage(format!(
-                "NUFFT tolerance {eps} is out of range; choose eps in [{EPS_MIN:e}, {EPS_MAX:e}] (e.g. 1e-6), or use the exact DFT"
+                "NUFFT tolerance {} is out of range; choose eps in [{EPS_MIN:e}, {EPS_MAX:e}] (e.g. 1e-6), or use the exact DFT",
+                crate::error::number(eps)
             )));
         }
         let grids = GRIDS

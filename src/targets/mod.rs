@@ -20,7 +20,7 @@
 //! radius = 1.6            # ... up to |k| = radius * sqrt(N)
 //! ```
 
-use crate::error::{Error, Result};
+use crate::error::{number, Error, Result};
 use crate::points::shear::MAX_SHEAR;
 use crate::spectrum::frequency;
 use serde::{Deserialize, Serialize};
@@ -224,7 +224,8 @@ fn non_negative(name: &str, v: f64) -> Result<()> {
     finite(name, v)?;
     if v < 0.0 {
         return Err(Error::Input(format!(
-            "target parameter '{name}' is {v}; it is a width or radius and must be >= 0"
+            "target parameter '{name}' is {}; it is a width or radius and must be >= 0",
+            number(v)
         )));
     }
     Ok(())
@@ -257,7 +258,8 @@ fn falloff(a: Option<f64>) -> Result<f64> {
     finite("falloff", a)?;
     if !(0.0..=4.0).contains(&a) {
         return Err(Error::Input(format!(
-            "target parameter 'falloff' is {a}; it is an exponent of |k| and must lie in [0, 4]"
+            "target parameter 'falloff' is {}; it is an exponent of |k| and must lie in [0, 4]",
+            number(a)
         )));
     }
     Ok(a)
@@ -316,13 +318,15 @@ impl Target {
                 if d.s0 > d.s1 {
                     return Err(Error::Input(format!(
                         "target has s0 = {} > s1 = {}; the wedge lies between the slopes s0 <= s1, swap them",
-                        d.s0, d.s1
+                        number(d.s0),
+                        number(d.s1)
                     )));
                 }
                 if d.s0 == d.s1 {
                     return Err(Error::Input(format!(
                         "target has s0 = s1 = {}, a single line, not a wedge; use kind = \"hairline\" with shear = {} or widen [s0, s1]",
-                        d.s0, d.s0
+                        number(d.s0),
+                        number(d.s0)
                     )));
                 }
                 max_shear("s0", d.s0)?;
@@ -715,7 +719,12 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
         .enumerate()
         .find(|(_, v)| !v.is_finite() || **v < 0.0)
     {
-        return Err(bad(format!("pixel ({}, {}) is {v}", at / cols, at % cols)));
+        return Err(bad(format!(
+            "pixel ({}, {}) is {}",
+            at / cols,
+            at % cols,
+            number(*v)
+        )));
     }
     Ok((pixels, [rows, cols]))
 }

@@ -17,7 +17,7 @@ use crate::rng;
 use crate::samplers::Sampler;
 use crate::spectrum::profiles::cone_index;
 use crate::spectrum::{check_res, fourier_sums, frequency, Method};
-use crate::stats::mean_and_stderr;
+use crate::stats::Welford;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 use std::f64::consts::TAU;
@@ -245,22 +245,21 @@ fn check_config(cfg: &VarianceConfig) -> Result<()> {
     Ok(())
 }
 
-/// Realizations whose per-cone sums are held in memory at once: the rest are folded into running means
-/// as each batch ends, so memory does not grow with `R` beyond one `f64` per realization.
+/// Realizations whose per-cone sums are held in memory at once: each batch is folded into running
+/// means as it ends, so memory does not grow with `R`.
 const REALIZATION_BATCH: usize = 1024;
 
-/// The per-realization sums at one `N`: every `V_r`, and each cone's mean and standard error over the
-/// realizations.
+/// The per-realization sums at one `N`, accumulated over the realizations.
 struct RealizationSums {
-    /// `V_r` in realization order.
-    totals: Vec<f64>,
-    /// Per cone: `(mean, stderr)` of its share of `V_r`.
-    cones: Vec<(f64, f64)>,
+    /// `V_r`: its mean is the grid sum, its standard error the prediction's.
+    total: Welford,
+    /// Per cone: its share of `V_r`.
+    cones: Vec<Welford>,
 }
 
-/// Per-realization `V_r` at size `n`, and per cone the mean and standard error of its share. Realizations
-/// run in parallel in batches of [`REALIZATION_BATCH`] and are reduced in realization order (Welford's
-/// update for the cones), so a seed gives the same bits whatever the thread count.
+/// Per-realization `V_r` at size `n`, and per cone its share, each as a running mean and standard
+/// error. Realizations run in parallel in batches of [`REALIZATION_BATCH`] and are pushed in
+/// realization order, so a seed gives the same bits whatever the thread count.
 fn realizations(
     sampler: &dyn Sampler,
     spec: &Spectrum,
@@ -283,30 +282,21 @@ fn realizations(
         }
         cones
     };
-    let mut totals = Vec::with_capacity(cfg.realizations);
-    // Welford: per cone the running mean and sum of squared deviations.
-    let mut mean = vec![0.0; cfg.cones];
-    let mut m2 = vec![0.0; cfg.cones];
+    let mut sums = RealizationSums {
+        total: Welford::default(),
+        cones: vec![Welford::default(); cfg.cones],
+    };
     for start in (0..cfg.realizations).step_by(REALIZATION_BATCH) {
         let end = (start + REALIZATION_BATCH).min(cfg.realizations);
         let batch: Vec<Vec<f64>> = (start..end).into_par_iter().map(one).collect();
         for cones in batch {
-            totals.push(cones.iter().sum());
-            let count = totals.len() as f64;
-            for ((m, s), x) in mean.iter_mut().zip(&mut m2).zip(&cones) {
-                let delta = x - *m;
-                *m += delta / count;
-                *s += delta * (x - *m);
+            sums.total.push(cones.iter().sum());
+            for (w, &x) in sums.cones.iter_mut().zip(&cones) {
+                w.push(x);
             }
         }
     }
-    let r = cfg.realizations as f64;
-    let cones = mean
-        .iter()
-        .zip(&m2)
-        .map(|(&m, &s)| (m, (s / (r - 1.0) / r).sqrt()))
-        .collect();
-    RealizationSums { totals, cones }
+    sums
 }
 
 /// Predicts the variance of `sampler` on `f` for every `N` of `ns`.
@@ -331,8 +321,9 @@ pub fn predict(
         }
         let spec = &spec.as_ref().expect("computed above").1;
         let per = realizations(sampler, spec, n, res, cfg);
-        let (grid, stderr) = mean_and_stderr(per.totals.iter().copied());
-        let (cones, cone_stderr) = per.cones.into_iter().unzip();
+        let (grid, stderr) = (per.total.mean(), per.total.stderr());
+        let cones = per.cones.iter().map(Welford::mean).collect();
+        let cone_stderr = per.cones.iter().map(Welford::stderr).collect();
         let tail = var_f.map(|v| (v - spec.total).max(0.0) / n as f64);
         points.push(VariancePoint {
             n,

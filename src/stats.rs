@@ -39,6 +39,41 @@ where
     (mean, (var / n).sqrt())
 }
 
+/// A streaming mean and standard error (Welford's update): values are pushed one at a time, in the
+/// caller's order, with `O(1)` memory. [`Welford::mean`] and [`Welford::stderr`] are those of
+/// [`mean_and_stderr`] over the same values (unbiased variance, divisor `n − 1`), up to rounding: the
+/// two differ by at most the bound the tests derive from f64 rounding. The same pushes in the same
+/// order give the same bits.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Welford {
+    count: usize,
+    mean: f64,
+    /// Sum of squared deviations from the running mean.
+    m2: f64,
+}
+
+impl Welford {
+    /// Adds one value.
+    pub fn push(&mut self, x: f64) {
+        self.count += 1;
+        let delta = x - self.mean;
+        self.mean += delta / self.count as f64;
+        self.m2 += delta * (x - self.mean);
+    }
+
+    /// The mean of the values pushed (0 before any).
+    pub fn mean(&self) -> f64 {
+        self.mean
+    }
+
+    /// The standard error of the mean, `sqrt(s² / n)` with the unbiased `s²`: NaN with fewer than two
+    /// values.
+    pub fn stderr(&self) -> f64 {
+        let n = self.count as f64;
+        (self.m2 / (n - 1.0) / n).sqrt()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -58,5 +93,64 @@ mod tests {
         let (m, se) = mean_and_stderr([3.0]);
         assert_eq!(m, 3.0);
         assert!(se.is_nan());
+    }
+
+    /// Welford's update against the two-pass [`mean_and_stderr`], on samples spread about 0 and about
+    /// a large offset (where a one-pass `Σx² − n·mean²` would lose every digit).
+    ///
+    /// Bounds, first order in the unit roundoff `u = 2^−53`, with `M = max |x|`, the range
+    /// `D = max x − min x` and `n` values:
+    /// - two-pass mean: recursive summation errs by at most `(n − 1) u Σ|x| ≤ (n − 1) n u M`, the
+    ///   division by `n` adds `u |mean|`: at most `n u M` on the mean.
+    /// - Welford's mean: `m_k = m_{k−1}(1 − 1/k) + x_k/k` damps an earlier error, and step `k` adds at
+    ///   most `2u |x_k − m_{k−1}| / k + u |m_k| ≤ 2uD/k + uM`: `E_k ≤ u (kM + 2D (1 + ln k))`.
+    /// - so the means differ by at most `u (2nM + 2D (1 + ln n))`.
+    /// - two-pass `Q = Σ (x − m̂)²`: each term errs by `3u` relative, the sum by `(n − 1) u`, and the
+    ///   mean's error `e` adds `n e²` (`Σ (x − m) = 0`): at most `(n + 2) u Q + n e²`.
+    /// - Welford's `Q`: each term `δ_k (x_k − m_k) ≥ 0` errs by `3u` relative and the sum by
+    ///   `(n − 1) u`; the running means' errors enter each term through both factors, each at most `D`
+    ///   (a running mean lies within the range): at most `(n + 2) u Q + Σ_k 2D E_k`.
+    /// - the standard error `sqrt(Q / (n − 1) / n)` then differs by at most half the relative error
+    ///   of `Q`, plus `2u` for each method's divisions and square root.
+    #[test]
+    fn welford_agrees_with_two_passes_within_rounding() {
+        let u = f64::EPSILON / 2.0;
+        let mut rng = crate::rng::substream(5, 0, 0);
+        for (offset, spread, n) in [(0.0, 1.0, 1000usize), (1e6, 1.0, 1000), (3.0, 1e-3, 10_000)] {
+            let xs: Vec<f64> = (0..n)
+                .map(|_| offset + spread * (rand::Rng::random::<f64>(&mut rng) - 0.5))
+                .collect();
+            let (m, se) = mean_and_stderr(xs.iter().copied());
+            let mut w = Welford::default();
+            xs.iter().for_each(|&x| w.push(x));
+            let big_m = xs.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            let (lo, hi) = xs
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                    (lo.min(x), hi.max(x))
+                });
+            let d = hi - lo;
+            let nf = n as f64;
+            let welford_mean = |k: f64| u * (k * big_m + 2.0 * d * (1.0 + k.ln()));
+            let mean_bound = nf * u * big_m + welford_mean(nf);
+            assert!((w.mean() - m).abs() <= mean_bound, "{} vs {m}", w.mean());
+            let q = se * se * nf * (nf - 1.0);
+            let e_two = nf * u * big_m;
+            let welford_terms: f64 = (1..=n).map(|k| 2.0 * d * welford_mean(k as f64)).sum();
+            let q_bound = 2.0 * (nf + 2.0) * u * q + nf * e_two * e_two + welford_terms;
+            let se_bound = se * (0.5 * q_bound / q + 4.0 * u);
+            assert!(
+                (w.stderr() - se).abs() <= se_bound,
+                "{} vs {se}",
+                w.stderr()
+            );
+            // The bound is not vacuous: it is well below the stderr itself, and below the n/(n − 1)
+            // change a wrong divisor would make.
+            assert!(se_bound < 0.1 * se / nf, "{se_bound} vs {se}");
+        }
+        let mut one = Welford::default();
+        one.push(3.0);
+        assert_eq!(one.mean(), 3.0);
+        assert!(one.stderr().is_nan());
     }
 }

@@ -126,7 +126,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             // (chi2/dof), and the interval holds only the two points' own errors, not a curvature.
             // A standard error of 0 (realizations that agree by chance) defines no weight: no interval.
             Some(fit) if fit.interval().is_none() => println!(
-                "{}: slope {:.3} (95% CI —, chi2/dof —: the realizations' standard error is under 1e-9 of the value, which gives no interval; if the set is random, raise --realizations)",
+                "{}: slope {:.3} (95% CI —, chi2/dof —: the realizations' standard error is no more than f64 rounding alone gives (an estimator with the same error for every shift), which gives no interval; if the set is random, raise --realizations)",
                 s.sampler, fit.slope
             ),
             Some(fit) if s.points.len() == 2 => println!(

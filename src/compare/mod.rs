@@ -288,7 +288,7 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
                 class: s.class.clone(),
                 sampler: spec.label(),
                 family: spec.family(),
-                fit: fit_points(&points),
+                fit: fit_points(&points, s.integrand.reference().value),
                 points,
                 setup_seconds: setup,
             });

@@ -16,17 +16,14 @@ pub struct SlopeFit {
     pub ci95: (f64, f64),
     /// `χ² / dof` of the fit (NaN-free: 0 with two points).
     pub chi2_per_dof: f64,
-    /// False when some point's standard error is 0 or below [`MIN_RELATIVE_ERROR`] of its value (a
-    /// chance agreement of few realizations, not a point known exactly): its weight would be infinite,
-    /// so the slope is fitted with equal weights and `stderr`, `ci95` and `chi2_per_dof` mean nothing
-    /// (they are set to 0, the interval to zero width). Read them through [`SlopeFit::interval`] and
+    /// False when some point's relative standard error `se / y` is not above its floor (the
+    /// `floor` of [`fit_power_law`]: what the values' own errors, of the method or of rounding, could
+    /// give with no spread between realizations; 0 included): its weight would come from those errors,
+    /// not from the realizations, so the slope is fitted with equal weights and `stderr`, `ci95` and
+    /// `chi2_per_dof` mean nothing (they are set to 0, the interval to zero width). Read them through [`SlopeFit::interval`] and
     /// [`SlopeFit::chi2`], which say so, and show "—".
     pub errors_defined: bool,
 }
-
-/// The smallest relative standard error `se / y` a point's weight is taken from; below it (0 included)
-/// the fit's interval and `χ²` are undefined.
-pub const MIN_RELATIVE_ERROR: f64 = 1e-9;
 
 impl SlopeFit {
     /// The 95% interval of the slope, or `None` when the points' errors do not define one.
@@ -50,11 +47,15 @@ impl SlopeFit {
 }
 
 /// Fits `y ∝ N^slope` to values `y` with standard errors `se`, weighting `ln y` by `(y / se)²`
-/// (delta method). Needs at least two distinct positive `N` and positive finite `y`. A standard error
-/// of 0 (or under [`MIN_RELATIVE_ERROR`] of its value) defines no weight: the slope is then fitted with
-/// equal weights and its interval and `χ²` are undefined ([`SlopeFit::errors_defined`] is false).
-pub fn fit_power_law(n: &[f64], y: &[f64], se: &[f64]) -> Result<SlopeFit> {
-    if n.len() != y.len() || n.len() != se.len() || n.len() < 2 {
+/// (delta method). Needs at least two distinct positive `N` and positive finite `y`.
+///
+/// `floor[i]` is the relative standard error (`se / y`, dimensionless) that point `i` could show from
+/// the errors of its own values alone (the spectrum method's tolerance, f64 rounding) if its
+/// realizations did not differ at all; each caller derives it from its arithmetic. A standard error
+/// not above its floor (0 included) defines no weight: the slope is then fitted with equal weights
+/// and its interval and `χ²` are undefined ([`SlopeFit::errors_defined`] is false).
+pub fn fit_power_law(n: &[f64], y: &[f64], se: &[f64], floor: &[f64]) -> Result<SlopeFit> {
+    if n.len() != y.len() || n.len() != se.len() || n.len() != floor.len() || n.len() < 2 {
         return Err(Error::Usage(
             "a slope fit needs at least two values of N".into(),
         ));
@@ -69,7 +70,7 @@ pub fn fit_power_law(n: &[f64], y: &[f64], se: &[f64]) -> Result<SlopeFit> {
     }
     let x: Vec<f64> = n.iter().map(|v| v.ln()).collect();
     let ly: Vec<f64> = y.iter().map(|v| v.ln()).collect();
-    let errors_defined = y.iter().zip(se).all(|(y, s)| s / y >= MIN_RELATIVE_ERROR);
+    let errors_defined = (0..n.len()).all(|i| se[i] / y[i] > floor[i]);
     let w: Vec<f64> = y
         .iter()
         .zip(se)
@@ -130,7 +131,7 @@ mod tests {
         let n = [16.0, 64.0, 256.0, 1024.0];
         let y: Vec<f64> = n.iter().map(|n: &f64| 3.0 * n.powf(-1.5)).collect();
         let se: Vec<f64> = y.iter().map(|y| 0.1 * y).collect();
-        let f = fit_power_law(&n, &y, &se).unwrap();
+        let f = fit_power_law(&n, &y, &se, &[1e-15; 4]).unwrap();
         assert!((f.slope + 1.5).abs() < 1e-12);
         assert!((f.intercept - 3f64.ln()).abs() < 1e-10);
         // Relative errors of 0.1 on ln y: se(slope) = 0.1 / sqrt(Σ (ln N − mean)²).
@@ -140,26 +141,32 @@ mod tests {
         assert!((f.stderr - want).abs() < 1e-12);
     }
 
-    /// A standard error of 0 (two realizations that agree by chance) gives no weight: the slope is
-    /// still fitted, but the interval and chi2 are undefined, not zero-width or astronomically large.
+    /// A standard error of 0 (two realizations that agree by chance), or one not above its floor,
+    /// gives no weight: the slope is still fitted, but the interval and chi2 are undefined, not
+    /// zero-width or astronomically large.
     #[test]
     fn a_zero_standard_error_leaves_the_interval_undefined() {
         let n = [1.0, 4.0, 16.0];
         let y = [0.1, 0.01, 2e-3];
-        let f = fit_power_law(&n[..2], &y[..2], &[0.0, 0.0]).unwrap();
+        let floor = [1e-12; 3];
+        let f = fit_power_law(&n[..2], &y[..2], &[0.0, 0.0], &floor[..2]).unwrap();
         assert!((f.slope - 0.1f64.ln() / 4f64.ln()).abs() < 1e-12);
         assert!(!f.errors_defined);
         assert_eq!(f.interval(), None);
         assert_eq!(f.chi2(2), None);
         assert_eq!(f.interval_text(3), "[—]");
-        let f = fit_power_law(&n, &y, &[0.0, 1e-3, 1e-4]).unwrap();
+        let f = fit_power_law(&n, &y, &[0.0, 1e-3, 1e-4], &floor).unwrap();
         assert!(!f.errors_defined && f.interval().is_none() && f.chi2(3).is_none());
         assert!(f.slope.is_finite() && f.chi2_per_dof == 0.0 && f.stderr == 0.0);
-        // A relative error far below any realizations' count can give is no weight either.
-        let f = fit_power_law(&n, &y, &[1e-13, 1e-3, 1e-4]).unwrap();
+        // A relative error at or below its floor is no weight either; just above it, it is one.
+        let f = fit_power_law(&n, &y, &[1e-13, 1e-3, 1e-4], &floor).unwrap();
         assert!(f.interval().is_none());
+        let f = fit_power_law(&n, &y, &[1e-13, 1e-3, 1e-4], &[1e-12, 0.0, 0.0]).unwrap();
+        assert!(f.interval().is_none());
+        let f = fit_power_law(&n, &y, &[1e-13, 1e-3, 1e-4], &[0.9e-12, 0.0, 0.0]).unwrap();
+        assert!(f.interval().is_some());
         // Honest errors define both.
-        let f = fit_power_law(&n, &y, &[1e-2, 1e-3, 1e-4]).unwrap();
+        let f = fit_power_law(&n, &y, &[1e-2, 1e-3, 1e-4], &floor).unwrap();
         assert!(f.errors_defined);
         let (lo, hi) = f.interval().unwrap();
         assert!(lo < f.slope && f.slope < hi);
@@ -169,8 +176,10 @@ mod tests {
 
     #[test]
     fn bad_values_are_reported() {
-        assert!(fit_power_law(&[16.0], &[1.0], &[0.1]).is_err());
-        assert!(fit_power_law(&[16.0, 64.0], &[1.0, 0.0], &[0.1, 0.1]).is_err());
-        assert!(fit_power_law(&[16.0, 16.0], &[1.0, 2.0], &[0.1, 0.1]).is_err());
+        let floor = [1e-12; 2];
+        assert!(fit_power_law(&[16.0], &[1.0], &[0.1], &floor[..1]).is_err());
+        assert!(fit_power_law(&[16.0, 64.0], &[1.0, 0.0], &[0.1, 0.1], &floor).is_err());
+        assert!(fit_power_law(&[16.0, 16.0], &[1.0, 2.0], &[0.1, 0.1], &floor).is_err());
+        assert!(fit_power_law(&[16.0, 64.0], &[1.0, 2.0], &[0.1, 0.1], &floor[..1]).is_err());
     }
 }

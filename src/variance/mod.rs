@@ -17,7 +17,7 @@ use crate::rng;
 use crate::samplers::Sampler;
 use crate::spectrum::profiles::cone_index;
 use crate::spectrum::{check_res, fourier_sums, frequency, Method};
-use crate::stats::mean_and_stderr;
+use crate::stats::Welford;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 use std::f64::consts::TAU;
@@ -191,8 +191,14 @@ fn phases(c: f64, ks: &[i64]) -> Vec<Complex64> {
     out
 }
 
+/// Whether [`power_at`] takes the full-grid sums (of the configured [`Method`]) for `active`
+/// frequencies on a `res × res` grid: when more than a quarter of it is active.
+fn full_grid(active: usize, res: usize) -> bool {
+    active * 4 > res * res
+}
+
 /// `|F(k)|² / N` at the active frequencies of one plane: the full-grid sums when most of the grid is
-/// active, else exact sums at the active frequencies only.
+/// active ([`full_grid`]), else exact sums at the active frequencies only.
 fn power_at(
     points: &[[f64; 2]],
     res: usize,
@@ -200,7 +206,7 @@ fn power_at(
     method: Method,
 ) -> Vec<f64> {
     let n = points.len() as f64;
-    if active.len() * 4 > res * res {
+    if full_grid(active.len(), res) {
         let sums = fourier_sums(points, res, method);
         return active.iter().map(|e| sums[e.0].norm_sqr() / n).collect();
     }
@@ -245,22 +251,21 @@ fn check_config(cfg: &VarianceConfig) -> Result<()> {
     Ok(())
 }
 
-/// Realizations whose per-cone sums are held in memory at once: the rest are folded into running means
-/// as each batch ends, so memory does not grow with `R` beyond one `f64` per realization.
+/// Realizations whose per-cone sums are held in memory at once: each batch is folded into running
+/// means as it ends, so memory does not grow with `R`.
 const REALIZATION_BATCH: usize = 1024;
 
-/// The per-realization sums at one `N`: every `V_r`, and each cone's mean and standard error over the
-/// realizations.
+/// The per-realization sums at one `N`, accumulated over the realizations.
 struct RealizationSums {
-    /// `V_r` in realization order.
-    totals: Vec<f64>,
-    /// Per cone: `(mean, stderr)` of its share of `V_r`.
-    cones: Vec<(f64, f64)>,
+    /// `V_r`: its mean is the grid sum, its standard error the prediction's.
+    total: Welford,
+    /// Per cone: its share of `V_r`.
+    cones: Vec<Welford>,
 }
 
-/// Per-realization `V_r` at size `n`, and per cone the mean and standard error of its share. Realizations
-/// run in parallel in batches of [`REALIZATION_BATCH`] and are reduced in realization order (Welford's
-/// update for the cones), so a seed gives the same bits whatever the thread count.
+/// Per-realization `V_r` at size `n`, and per cone its share, each as a running mean and standard
+/// error. Realizations run in parallel in batches of [`REALIZATION_BATCH`] and are pushed in
+/// realization order, so a seed gives the same bits whatever the thread count.
 fn realizations(
     sampler: &dyn Sampler,
     spec: &Spectrum,
@@ -283,30 +288,61 @@ fn realizations(
         }
         cones
     };
-    let mut totals = Vec::with_capacity(cfg.realizations);
-    // Welford: per cone the running mean and sum of squared deviations.
-    let mut mean = vec![0.0; cfg.cones];
-    let mut m2 = vec![0.0; cfg.cones];
+    let mut sums = RealizationSums {
+        total: Welford::default(),
+        cones: vec![Welford::default(); cfg.cones],
+    };
     for start in (0..cfg.realizations).step_by(REALIZATION_BATCH) {
         let end = (start + REALIZATION_BATCH).min(cfg.realizations);
         let batch: Vec<Vec<f64>> = (start..end).into_par_iter().map(one).collect();
         for cones in batch {
-            totals.push(cones.iter().sum());
-            let count = totals.len() as f64;
-            for ((m, s), x) in mean.iter_mut().zip(&mut m2).zip(&cones) {
-                let delta = x - *m;
-                *m += delta / count;
-                *s += delta * (x - *m);
+            sums.total.push(cones.iter().sum());
+            for (w, &x) in sums.cones.iter_mut().zip(&cones) {
+                w.push(x);
             }
         }
     }
-    let r = cfg.realizations as f64;
-    let cones = mean
+    sums
+}
+
+/// The relative error of each realization's `V_r` (and of each cone's share) that the spectrum's
+/// computation allows, at `n` points on a `res × res` grid. `V_r` is a sum of `|f̂|² P(k) / N ≥ 0`, so
+/// its relative error is at most the largest of its terms':
+/// - full-grid NUFFT sums: `10 · eps`, the accuracy contract of [`crate::spectrum::nufft::Nufft2d`]
+///   on bins above 1e-3 of the mean power (a bin far below carries a negligible share of `V_r`);
+/// - the exact DFT, and the exact sums at sparse frequencies: f64 rounding over the `N` points. Each
+///   term `exp(−2πi k·x)` errs by at most `π K u` from the rounding of `k·x` (at most `u K / 2`
+///   turns) and `200 u` from its sine and cosine, products and the at most 32 steps of the sparse
+///   recurrence; summing `N` terms of modulus 1 errs by at most `(N − 1) u N`. Relative to `|F| = N`,
+///   the bins where a set with the same spectrum for every shift (a lattice) puts its power, `F`
+///   errs by `(N + π K + 200) u`, and `P = |F|² / N` by twice that. (Bins where `F` is 0 exactly
+///   get `|ΔF|² / N`, second order.)
+fn relative_error(spec: &Spectrum, res: usize, n: usize, method: Method) -> f64 {
+    let u = f64::EPSILON / 2.0;
+    let rounding = 2.0 * (n as f64 + std::f64::consts::PI * res as f64 + 200.0) * u;
+    let nufft = match method {
+        Method::Nufft { eps } => 10.0 * eps,
+        Method::Exact => 0.0,
+    };
+    let uses_method = spec
+        .active
         .iter()
-        .zip(&m2)
-        .map(|(&m, &s)| (m, (s / (r - 1.0) / r).sqrt()))
-        .collect();
-    RealizationSums { totals, cones }
+        .any(|a| !a.is_empty() && full_grid(a.len(), res));
+    if uses_method {
+        rounding.max(nufft)
+    } else {
+        rounding
+    }
+}
+
+/// The floor of a point's relative standard error ([`fit_power_law`]) when each realization's value
+/// is within a relative `rho` of the same value (a share `part` of the fitted one, the rest exact):
+/// values within `± rho·v` of one another have a standard deviation of at most
+/// `rho v sqrt(R / (R − 1))`, the running mean's rounding adds at most `R u v`, and the standard
+/// error divides by `sqrt(R)`: `(rho + R u) · part / sqrt(R − 1)`.
+fn stderr_floor(rho: f64, realizations: usize, part: f64) -> f64 {
+    let r = realizations as f64;
+    (rho + r * f64::EPSILON / 2.0) * part / (r - 1.0).sqrt()
 }
 
 /// Predicts the variance of `sampler` on `f` for every `N` of `ns`.
@@ -321,6 +357,8 @@ pub fn predict(
     let planes = f.spectral_planes().unwrap_or_default();
     let var_f = f.mean_square().map(|m| m - f.reference().value.powi(2));
     let mut points = Vec::with_capacity(ns.len());
+    // Per N, the relative error of each realization's values ([`relative_error`]).
+    let mut rho = Vec::with_capacity(ns.len());
     let mut spec: Option<(usize, Spectrum)> = None;
     for &n in ns {
         let res = cfg
@@ -331,9 +369,11 @@ pub fn predict(
         }
         let spec = &spec.as_ref().expect("computed above").1;
         let per = realizations(sampler, spec, n, res, cfg);
-        let (grid, stderr) = mean_and_stderr(per.totals.iter().copied());
-        let (cones, cone_stderr) = per.cones.into_iter().unzip();
+        let (grid, stderr) = (per.total.mean(), per.total.stderr());
+        let cones = per.cones.iter().map(Welford::mean).collect();
+        let cone_stderr = per.cones.iter().map(Welford::stderr).collect();
         let tail = var_f.map(|v| (v - spec.total).max(0.0) / n as f64);
+        rho.push(relative_error(spec, res, n, cfg.method));
         points.push(VariancePoint {
             n,
             res,
@@ -349,13 +389,22 @@ pub fn predict(
     let fit = {
         let v: Vec<f64> = points.iter().map(|p| p.variance).collect();
         let se: Vec<f64> = points.iter().map(|p| p.stderr).collect();
-        fit_power_law(&nf, &v, &se).ok()
+        let floor: Vec<f64> = points
+            .iter()
+            .zip(&rho)
+            .map(|(p, &r)| stderr_floor(r, cfg.realizations, p.grid / p.variance))
+            .collect();
+        fit_power_law(&nf, &v, &se, &floor).ok()
     };
     let cone_fits = (0..cfg.cones)
         .map(|c| {
             let v: Vec<f64> = points.iter().map(|p| p.cones[c]).collect();
             let se: Vec<f64> = points.iter().map(|p| p.cone_stderr[c]).collect();
-            fit_power_law(&nf, &v, &se).ok()
+            let floor: Vec<f64> = rho
+                .iter()
+                .map(|&r| stderr_floor(r, cfg.realizations, 1.0))
+                .collect();
+            fit_power_law(&nf, &v, &se, &floor).ok()
         })
         .collect();
     Ok(VariancePrediction {

@@ -4,7 +4,7 @@
 //! on the warm cache (tables reused, the same numbers).
 
 use anisospec::compare::tables::start_sampler;
-use anisospec::converge::fit::MIN_RELATIVE_ERROR;
+use anisospec::converge::rounding_floor;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -175,6 +175,8 @@ fn read_npy(path: &Path) -> (Vec<u64>, Vec<f64>) {
 struct Point {
     subject: String,
     class: String,
+    /// The integral the errors are measured against.
+    integral: f64,
     sampler: String,
     n: usize,
     mse: f64,
@@ -297,6 +299,7 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
         .map(|r| Point {
             subject: r["subject"].clone(),
             class: r["class"].clone(),
+            integral: num(r, "integral"),
             sampler: r["sampler"].clone(),
             n: r["n"].parse().unwrap(),
             mse: num(r, "mse"),
@@ -314,6 +317,16 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
     assert_eq!(subjects.len(), 2, "{subjects:?}");
     assert_eq!(subjects[0], (EDGE.to_string(), "analytic".to_string()));
     assert_eq!(subjects[1].1, "hairline");
+    // Each row carries its subject's integral: the edge's exact value, and a pixel's reference (a
+    // radiance, positive).
+    let edge = anisospec::integrands::parse("sheared:s=0.5,c=0.7@xu").unwrap();
+    for p in &points {
+        if p.subject == EDGE {
+            assert_eq!(p.integral, edge.reference().value, "{p:?}");
+        } else {
+            assert!(p.integral.is_finite() && p.integral > 0.0, "{p:?}");
+        }
+    }
     assert_eq!(points.len(), subjects.len() * SAMPLERS.len() * ns.len());
     let studies: Vec<&[Point]> = points.chunks(ns.len()).collect();
     for (i, study) in studies.iter().enumerate() {
@@ -340,11 +353,12 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
         let through = (b.mse / a.mse).ln() / (b.n as f64 / a.n as f64).ln();
         let slope = a.slope;
         assert!((slope - through).abs() < 1e-9, "{slope} vs {through}");
-        // The interval is left empty exactly when a point's standard error defines no weight (an
-        // estimator whose error is the same for every shift, e.g. centred strata on an unmoved edge).
+        // The interval is left empty exactly when a point's standard error defines no weight: not
+        // above what f64 rounding alone gives an estimator whose error is the same for every shift
+        // (e.g. centred strata on an unmoved edge).
         let weightless = study
             .iter()
-            .any(|p| p.mse_stderr < MIN_RELATIVE_ERROR * p.mse);
+            .any(|p| p.mse_stderr / p.mse <= rounding_floor(p.n, REALIZATIONS, p.mse, p.integral));
         assert_eq!(a.interval.is_none(), weightless, "{study:?}");
         if let Some((lo, hi)) = a.interval {
             assert!(lo <= slope && slope <= hi, "{slope} outside [{lo}, {hi}]");

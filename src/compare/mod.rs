@@ -50,6 +50,9 @@ pub struct SubjectInfo {
     pub shear: (f64, f64),
     /// The range of shears the integrand holds.
     pub shear_range: (f64, f64),
+    /// The integral the errors are measured against (its exact value, or a pixel's high-count
+    /// reference), in the integrand's units (radiance for a pixel).
+    pub integral: f64,
 }
 
 /// How a sampler of the study is made for a subject.
@@ -306,6 +309,7 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
                 class: s.class.clone(),
                 shear: s.shear,
                 shear_range: s.shear_range,
+                integral: s.integrand.reference().value,
             })
             .collect(),
         studies,

@@ -98,9 +98,15 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
     write_atomic(&out.join("convergence.csv"), |w| {
         writeln!(
             w,
-            "subject,class,sampler,family,n,realizations,mse,mse_stderr,seconds_per_estimate,setup_seconds,slope,slope_ci_low,slope_ci_high"
+            "subject,class,integral,sampler,family,n,realizations,mse,mse_stderr,seconds_per_estimate,setup_seconds,slope,slope_ci_low,slope_ci_high"
         )?;
         for s in &outcome.studies {
+            let integral = outcome
+                .subjects
+                .iter()
+                .find(|i| i.label == s.subject)
+                .expect("every study's subject is in the outcome")
+                .integral;
             let (slope, lo, hi) =
                 s.fit
                     .map_or((String::new(), String::new(), String::new()), |f| {
@@ -112,7 +118,7 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
             for (p, setup) in s.points.iter().zip(&s.setup_seconds) {
                 writeln!(
                     w,
-                    "\"{}\",{},\"{}\",{},{},{r},{},{},{},{},{slope},{lo},{hi}",
+                    "\"{}\",{},{integral},\"{}\",{},{},{r},{},{},{},{},{slope},{lo},{hi}",
                     s.subject,
                     s.class,
                     s.sampler,
@@ -436,19 +442,20 @@ fn write_markdown(
         writeln!(w, "## Integrands\n")?;
         writeln!(
             w,
-            "| integrand | class | oracle shear (sx, sy) | shear range |"
+            "| integrand | class | integral | oracle shear (sx, sy) | shear range |"
         )?;
-        writeln!(w, "|---|---|---|---|")?;
+        writeln!(w, "|---|---|---|---|---|")?;
         for SubjectInfo {
             label,
             class,
             shear,
             shear_range: range,
+            integral,
         } in &outcome.subjects
         {
             writeln!(
                 w,
-                "| {label} | {class} | ({}, {}) | [{}, {}] |",
+                "| {label} | {class} | {integral:.6} | ({}, {}) | [{}, {}] |",
                 shear_text(shear.0),
                 shear_text(shear.1),
                 shear_text(range.0),

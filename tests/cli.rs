@@ -397,6 +397,36 @@ fn tiny_numbers_are_echoed_in_short_form() {
         "NUFFT tolerance 1e-300 is out of range",
         &png,
     );
+    // An integrand's messages and its name: a fan of one tiny shear, and an edge sheared by one.
+    let fan = anisospec(&[
+        "converge",
+        "--sampler",
+        "random",
+        "--integrand",
+        "fan:s0=1e-300,s1=1e-300@xu",
+        "-n",
+        "16",
+    ]);
+    let err = String::from_utf8_lossy(&fan.stderr);
+    assert_eq!(fan.status.code(), Some(2), "{err}");
+    assert!(err.contains("s0 = s1 = 1e-300 is a single edge"), "{err}");
+    let edge = anisospec(&[
+        "converge",
+        "--sampler",
+        "random",
+        "--integrand",
+        "sheared:s=1e-300,c=0.5@xu",
+        "-n",
+        "16",
+        "--realizations",
+        "4",
+    ]);
+    let text = String::from_utf8_lossy(&edge.stdout);
+    assert!(edge.status.success(), "{text}");
+    assert!(
+        text.contains("integrand sheared:s=1e-300,c=0.5@xu"),
+        "{text}"
+    );
 }
 
 /// converge's CSV quotes sampler names, which hold commas once sheared: every row has the header's

@@ -4,7 +4,7 @@
 
 use super::polygon;
 use super::{Integrand, Reference};
-use crate::error::{Error, Result};
+use crate::error::{number, Error, Result};
 use crate::points::shear::MAX_SHEAR;
 use crate::points::wrap;
 use crate::quad;
@@ -30,7 +30,8 @@ fn shear(name: &str, key: &str, v: f64) -> Result<f64> {
         Ok(v)
     } else {
         Err(Error::Usage(format!(
-            "{name}: {key}={v:?} is beyond the largest shear, {MAX_SHEAR:e}; give a shear of magnitude at most that"
+            "{name}: {key}={} is beyond the largest shear, {MAX_SHEAR:e}; give a shear of magnitude at most that",
+            number(v)
         )))
     }
 }
@@ -64,13 +65,15 @@ impl Gaussian {
         finite("gaussian", "sigma", sigma)?;
         if sigma <= 0.0 || sigma > 1.0 {
             return Err(Error::Usage(format!(
-                "gaussian: sigma={sigma} is not a width in (0, 1]; give a positive sigma no wider than the domain, e.g. sigma=0.15"
+                "gaussian: sigma={} is not a width in (0, 1]; give a positive sigma no wider than the domain, e.g. sigma=0.15",
+                number(sigma)
             )));
         }
         for (key, c) in [("cx", centre[0]), ("cy", centre[1])] {
             if !(0.0..=1.0).contains(&finite("gaussian", key, c)?) {
                 return Err(Error::Usage(format!(
-                    "gaussian: {key}={c} puts the centre outside the unit square; use a value in [0, 1]"
+                    "gaussian: {key}={} puts the centre outside the unit square; use a value in [0, 1]",
+                    number(c)
                 )));
             }
         }
@@ -172,14 +175,16 @@ impl Disc {
         finite("disc", "r", r)?;
         if r <= 0.0 || r > 0.5 {
             return Err(Error::Usage(format!(
-                "disc: r={r} is not a radius in (0, 0.5]; a disc inside the unit square has 0 < r <= 0.5"
+                "disc: r={} is not a radius in (0, 0.5]; a disc inside the unit square has 0 < r <= 0.5",
+                number(r)
             )));
         }
         for (key, c) in [("cx", centre[0]), ("cy", centre[1])] {
             finite("disc", key, c)?;
             if c < r || c > 1.0 - r {
                 return Err(Error::Usage(format!(
-                    "disc: {key}={c} with r={r} puts the disc outside the domain [0,1]²; keep {r} <= {key} <= {}",
+                    "disc: {key}={} with r={r} puts the disc outside the domain [0,1]²; keep {r} <= {key} <= {}",
+                    number(c),
                     1.0 - r
                 )));
             }
@@ -295,7 +300,8 @@ impl HalfPlane {
         };
         if c <= lo || c >= hi {
             return Err(Error::Usage(format!(
-                "{family}: the edge at c={c} misses the unit square (it crosses it for {lo:.4} < c < {hi:.4}); choose c in that range"
+                "{family}: the edge at c={} misses the unit square (it crosses it for {lo:.4} < c < {hi:.4}); choose c in that range",
+                number(c)
             )));
         }
         Ok(Self {
@@ -310,8 +316,10 @@ impl HalfPlane {
 impl Integrand for HalfPlane {
     fn name(&self) -> String {
         match self.kind {
-            EdgeKind::Oriented { theta_deg } => format!("step:theta={theta_deg},c={}", self.c),
-            EdgeKind::Sheared { s } => format!("sheared:s={s},c={}", self.c),
+            EdgeKind::Oriented { theta_deg } => {
+                format!("step:theta={},c={}", number(theta_deg), number(self.c))
+            }
+            EdgeKind::Sheared { s } => format!("sheared:s={},c={}", number(s), number(self.c)),
         }
     }
     fn dims(&self) -> usize {
@@ -378,12 +386,15 @@ impl Fan {
         shear("fan", "s1", s1)?;
         if s0 > s1 {
             return Err(Error::Usage(format!(
-                "fan: s0={s0} > s1={s1}; the shears run from s0 up to s1, so swap them (fan:s0={s1},s1={s0})"
+                "fan: s0={a} > s1={b}; the shears run from s0 up to s1, so swap them (fan:s0={b},s1={a})",
+                a = number(s0),
+                b = number(s1)
             )));
         }
         if s0 == s1 {
             return Err(Error::Usage(format!(
-                "fan: s0 = s1 = {s0} is a single edge, not a fan; use sheared:s={s0} or widen [s0, s1]"
+                "fan: s0 = s1 = {a} is a single edge, not a fan; use sheared:s={a} or widen [s0, s1]",
+                a = number(s0)
             )));
         }
         let c = match c {
@@ -393,7 +404,8 @@ impl Fan {
         let (lo, hi) = (s0.min(0.0), 1.0 + s1.max(0.0));
         if c <= lo || c >= hi {
             return Err(Error::Usage(format!(
-                "fan: the edges at c={c} miss the unit square (they cross it for {lo:.4} < c < {hi:.4}); choose c in that range"
+                "fan: the edges at c={} miss the unit square (they cross it for {lo:.4} < c < {hi:.4}); choose c in that range",
+                number(c)
             )));
         }
         let mut fan = Self {
@@ -514,7 +526,12 @@ const FAN_OCTAVES: i32 = 20;
 
 impl Integrand for Fan {
     fn name(&self) -> String {
-        format!("fan:s0={},s1={},c={}", self.s0, self.s1, self.c)
+        format!(
+            "fan:s0={},s1={},c={}",
+            number(self.s0),
+            number(self.s1),
+            number(self.c)
+        )
     }
     fn dims(&self) -> usize {
         2

@@ -641,7 +641,20 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
     for path in &linked {
         check_png(&out.join(path));
     }
-    for file in files_under(out) {
+    // manifest.txt lists every file of the report, and nothing of a cache kept in its folder.
+    let manifest = std::fs::read_to_string(out.join("manifest.txt")).unwrap();
+    let listed: BTreeSet<PathBuf> = manifest
+        .lines()
+        .skip(1)
+        .filter(|l| !l.ends_with('/'))
+        .map(PathBuf::from)
+        .collect();
+    let report_files: BTreeSet<PathBuf> = files_under(out)
+        .into_iter()
+        .filter(|f| !f.starts_with("cache") && f != Path::new("manifest.txt"))
+        .collect();
+    assert_eq!(listed, report_files, "{manifest}");
+    for file in report_files {
         let top_level = file.parent() == Some(Path::new(""));
         let named = top_level && text.contains(&format!("`{}`", file.display()));
         let gallery_npy = file.starts_with("spectra")
@@ -679,13 +692,14 @@ fn measured(points: &[Point]) -> Vec<Point> {
         .collect()
 }
 
-/// A study runs, writes a consistent report, and runs again on its cache without rebuilding a table
-/// or changing a number; the same study with its sizes reordered and one a sampler cannot make reports
-/// the same measurements.
+/// A study runs, writes a consistent report, and runs again on its cache (kept in the first report's
+/// folder) without rebuilding a table or changing a number; the same study with its sizes reordered
+/// and one a sampler cannot make, written over the first report, reports the same measurements and
+/// leaves the cache where it was.
 #[test]
 fn compare_writes_a_consistent_report_and_reuses_its_cache() {
     let dir = tempfile::tempdir().unwrap();
-    let cache = dir.path().join("cache");
+    let cache = dir.path().join("first/cache");
     let ns = [16, 64];
     let first = compare(dir.path(), "first", &study(&ns), &cache);
     let points = check_report(&first, &ns);
@@ -729,10 +743,18 @@ fn compare_writes_a_consistent_report_and_reuses_its_cache() {
 
     // Sizes out of order, one of them (15) not a square, which padded jittered replaces by 16: the
     // report keeps the config's order and shows the N used, the robustness gains are taken at the
-    // largest N, and every measurement both runs made is the same.
+    // largest N, and every measurement both runs made is the same. It replaces the first report and
+    // keeps the cache in its folder.
     let odd = [64, 15];
-    let third = compare(dir.path(), "third", &study(&odd), &cache);
+    let before = snapshot(&cache);
+    let third = compare(dir.path(), "first", &study(&odd), &cache);
     let shuffled = check_report(&third, &odd);
+    // (It adds the table for N = 15 and touches none of the others.)
+    let after = snapshot(&cache);
+    assert!(
+        before.iter().all(|(f, v)| after.get(f) == Some(v)),
+        "the third run changed the cache"
+    );
     let key = |p: &Point| (p.subject.clone(), p.sampler.clone(), p.n);
     let earlier: BTreeMap<_, _> = points.iter().map(|p| (key(p), p)).collect();
     let mut shared = 0;

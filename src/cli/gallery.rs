@@ -74,8 +74,9 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
     crate::output::check_folder(&args.out, "--out", "gallery")?;
     let method = Method::nufft(args.eps)?;
     let gallery = args.out.join("gallery");
+    crate::output::check_report_folder(&gallery, GALLERY_MARKER, "--out")?;
     // The whole gallery or nothing: a failure leaves an earlier one as it was.
-    write_folder(&gallery, GALLERY_MARKER, "--out", |dir| {
+    write_folder(&gallery, GALLERY_MARKER, |dir| {
         let mut rows = Vec::new();
         let mut spectra = Vec::new();
         let jobs = GALLERY_2D

@@ -317,7 +317,7 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
         seconds: started.elapsed().as_secs_f64(),
     };
     // The whole folder or nothing: a failure while writing it leaves an earlier report as it was.
-    crate::output::write_folder(out, REPORT_MARKER, "--out", |staging| {
+    crate::output::write_folder(out, REPORT_MARKER, |staging| {
         report::write(&outcome, &specs, &tables, staging)
     })?;
     Ok(outcome)

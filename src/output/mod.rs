@@ -128,12 +128,16 @@ impl ReportMarker {
 }
 
 /// Checks, before any work, that `dest` (given by `flag`) may take a report marked by `marker`: it is
-/// missing, empty, or holds an earlier report (its marker). A report folder holds one report, so a
-/// folder of other files (sources, say) is refused with a usage error naming it and the fix, and
-/// nothing in it is touched.
+/// missing, empty, or holds an earlier report (its marker, and a [`MANIFEST`] of this tool if any). A
+/// report folder holds one report, so a folder of other files (sources, say) is refused with a usage
+/// error naming it and the fix, and nothing in it is touched. Every caller of [`write_folder`] calls
+/// this first, before the work that fills the report.
 pub fn check_report_folder(dest: &Path, marker: ReportMarker, flag: &str) -> Result<()> {
-    if !dest.is_dir() || marker.is_in(dest) {
+    if !dest.is_dir() {
         return Ok(());
+    }
+    if marker.is_in(dest) {
+        return read_manifest(dest).map(drop);
     }
     let entries = std::fs::read_dir(dest).map_err(|e| Error::io("read the folder", dest, e))?;
     let mut others = Vec::new();
@@ -178,31 +182,36 @@ fn is_staging(name: &std::ffi::OsStr) -> bool {
 
 /// Writes a report folder as a whole (a compare report, a gallery): `write` fills a temporary folder
 /// inside `dest`, and only when it succeeds, and no file of the new set clashes with a folder of the
-/// old (or a folder with a file), are the files it wrote moved into `dest`. The new report then
-/// replaces the old one: the files and subfolders the earlier report's [`MANIFEST`] lists and the new
-/// report does not write go, so no stale plot of an earlier study stays beside the new ones; nothing
-/// else in `dest` is touched, and links are removed, never followed. A report folder from before the
-/// manifest keeps its stale files. `dest` must pass [`check_report_folder`] with `marker` (a caller
-/// checks it before a long run); a file that appears in a folder without a report during the run is
-/// never replaced. On a failure before the move none of `dest`'s files is touched, `dest` itself goes
-/// again if this call created it, and an error names the final path, not the temporary one; a failure
-/// while moving or pruning leaves the new files moved so far beside old ones.
+/// old (or a folder with a file) or with a file that is not the earlier report's, are the files it
+/// wrote moved into `dest`. The new report then replaces the old one: the files and subfolders the
+/// earlier report's [`MANIFEST`] lists and the new report does not write go, so no stale plot of an
+/// earlier study stays beside the new ones; nothing else in `dest` is touched (a file that appeared
+/// during the run included), and links are removed, never followed. An earlier report from before the
+/// manifest (its `marker` and no manifest) has its files replaced but none pruned. The caller checks
+/// `dest` with [`check_report_folder`] before any work. On a failure before the move none of `dest`'s
+/// files is touched, `dest` itself goes again if this call created it, and an error names the final
+/// path, not the temporary one. The manifest lists the earlier and the new files while they move, so
+/// a failure while moving or pruning leaves new files beside old ones, all of which the next report
+/// can replace.
 pub fn write_folder<T>(
     dest: &Path,
     marker: ReportMarker,
-    flag: &str,
     write: impl FnOnce(&Path) -> Result<T>,
 ) -> Result<T> {
-    check_report_folder(dest, marker, flag)?;
     let created = !dest.exists();
     let result = staging_folder(dest).and_then(|staging| {
         let value =
             write(staging.path()).map_err(|e| e.with_path_replaced(staging.path(), dest))?;
         let earlier = read_manifest(dest)?;
-        check_tree(staging.path(), dest, marker.is_in(dest))?;
+        let before_manifest = earlier.is_none() && marker.is_in(dest);
+        let earlier = earlier.unwrap_or_default();
+        let incoming = check_tree(staging.path(), dest, |target| {
+            before_manifest || earlier.iter().any(|e| e == target)
+        })?;
+        write_manifest(dest, earlier.iter().chain(&incoming))?;
         let written = move_tree(staging.path(), dest)?;
         prune_stale(dest, &earlier, &written)?;
-        write_manifest(dest, &written)?;
+        write_manifest(dest, written.iter())?;
         Ok(value)
     });
     if result.is_err() && created {
@@ -249,9 +258,10 @@ fn walk_tree(
 }
 
 /// Checks, before anything moves, that every file under `from` can go to the same place under `to`:
-/// no folder where a file goes, no file where a folder goes, and, unless `to` holds an earlier report
-/// (`replacing`), no existing file where a file goes (one that appeared during the run).
-fn check_tree(from: &Path, to: &Path, replacing: bool) -> Result<()> {
+/// no folder where a file goes, no file where a folder goes, and no existing file where a file goes
+/// unless `replaceable` (the earlier report's). Returns the places under `to`, files and folders.
+fn check_tree(from: &Path, to: &Path, replaceable: impl Fn(&Path) -> bool) -> Result<Vec<PathBuf>> {
+    let mut targets = Vec::new();
     walk_tree(from, to, &mut |_, target, is_folder| {
         if is_folder && target.exists() && !target.is_dir() {
             return Err(Error::Usage(format!(
@@ -262,14 +272,17 @@ fn check_tree(from: &Path, to: &Path, replacing: bool) -> Result<()> {
         if !is_folder && target.is_dir() {
             return Err(folder_in_the_way(target));
         }
-        if !is_folder && !replacing && target.symlink_metadata().is_ok() {
+        if !is_folder && target.symlink_metadata().is_ok() && !replaceable(target) {
             return Err(Error::Usage(format!(
-                "cannot write {}: a file of that name appeared there during the run; move it away and run again",
+                "cannot write {}: a file of that name is there and the earlier report did not write it \
+                 (it is not in {MANIFEST}); move it away and run again",
                 target.display()
             )));
         }
+        targets.push(target.to_path_buf());
         Ok(())
-    })
+    })?;
+    Ok(targets)
 }
 
 /// Moves every file under `from` to the same place under `to`, creating subfolders as needed, and
@@ -290,54 +303,71 @@ fn move_tree(from: &Path, to: &Path) -> Result<Vec<PathBuf>> {
 }
 
 /// The paths under `dest` that the [`MANIFEST`] of an earlier report lists, files and folders, in
-/// its order; none when there is no manifest. A listed path that leaves `dest` (absolute, or through
-/// `..`) is never returned. A `manifest.txt` that is not this tool's is refused, naming the fix.
-fn read_manifest(dest: &Path) -> Result<Vec<PathBuf>> {
+/// its order; `None` when there is no manifest. A listed path that leaves `dest` (absolute, or
+/// through `..`) is never returned. A `manifest.txt` that is not this tool's (another first line, not
+/// text, a folder) is refused with a usage error naming the fix.
+fn read_manifest(dest: &Path) -> Result<Option<Vec<PathBuf>>> {
     let path = dest.join(MANIFEST);
+    let foreign = || {
+        Error::Usage(format!(
+            "{} was not written by anisospec, and a report writes its list of files there; move it away",
+            path.display()
+        ))
+    };
     let text = match std::fs::read_to_string(&path) {
         Ok(text) => text,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e)
+            if matches!(
+                e.kind(),
+                std::io::ErrorKind::InvalidData | std::io::ErrorKind::IsADirectory
+            ) =>
+        {
+            return Err(foreign())
+        }
         Err(e) => return Err(Error::io("read", &path, e)),
     };
     let mut lines = text.lines();
     if lines.next() != Some(MANIFEST_HEADER) {
-        return Err(Error::Usage(format!(
-            "{} was not written by anisospec, and a report writes its list of files there; move it away",
-            path.display()
-        )));
+        return Err(foreign());
     }
-    Ok(lines
-        .map(|line| Path::new(line.trim_end_matches('/')))
-        .filter(|rel| {
-            !rel.as_os_str().is_empty()
-                && rel
-                    .components()
-                    .all(|c| matches!(c, std::path::Component::Normal(_)))
-        })
-        .map(|rel| dest.join(rel))
-        .collect())
+    Ok(Some(
+        lines
+            .map(|line| Path::new(line.trim_end_matches('/')))
+            .filter(|rel| {
+                !rel.as_os_str().is_empty()
+                    && rel
+                        .components()
+                        .all(|c| matches!(c, std::path::Component::Normal(_)))
+            })
+            .map(|rel| dest.join(rel))
+            .collect(),
+    ))
 }
 
-/// Writes the [`MANIFEST`] of the report whose files and folders under `dest` are `written`, sorted
-/// (the same report gives the same bytes).
-fn write_manifest(dest: &Path, written: &[PathBuf]) -> Result<()> {
-    write_atomic(&dest.join(MANIFEST), |w| {
-        writeln!(w, "{MANIFEST_HEADER}")?;
-        let mut sorted: Vec<&PathBuf> = written.iter().collect();
-        sorted.sort();
-        for path in sorted {
-            let Ok(rel) = path.strip_prefix(dest) else {
-                continue;
-            };
+/// Writes the [`MANIFEST`] listing `paths` (files and folders under `dest`), sorted and each once (the
+/// same report gives the same bytes).
+fn write_manifest<'a>(dest: &Path, paths: impl Iterator<Item = &'a PathBuf>) -> Result<()> {
+    let mut lines: Vec<String> = paths
+        .filter_map(|path| {
+            let rel = path.strip_prefix(dest).ok()?;
             if rel == Path::new(MANIFEST) {
-                continue;
+                return None;
             }
             let parts: Vec<_> = rel
                 .components()
                 .map(|c| c.as_os_str().to_string_lossy())
                 .collect();
             let slash = if is_real_folder(path) { "/" } else { "" };
-            writeln!(w, "{}{slash}", parts.join("/"))?;
+            Some(format!("{}{slash}", parts.join("/")))
+        })
+        .collect();
+    lines.sort();
+    lines.dedup();
+    write_atomic(&dest.join(MANIFEST), |w| {
+        writeln!(w, "{MANIFEST_HEADER}")?;
+        for line in &lines {
+            writeln!(w, "{line}")?;
         }
         Ok(())
     })
@@ -593,7 +623,7 @@ mod tests {
     fn a_failed_folder_writes_nothing() {
         let dir = tempfile::tempdir().unwrap();
         let report = dir.path().join("report");
-        let failed = write_folder(&report, MARK, "--out", |stage| {
+        let failed = write_folder(&report, MARK, |stage| {
             write_atomic(&stage.join("a.md"), |w| writeln!(w, "a"))?;
             Err::<(), _>(Error::Numerical("the plot failed".into()))
         });
@@ -606,7 +636,7 @@ mod tests {
         std::fs::create_dir_all(report.join("plots")).unwrap();
         std::fs::write(report.join("a.md"), "# a report").unwrap();
         std::fs::write(report.join("plots/keep.png"), "kept").unwrap();
-        let failed = write_folder(&report, MARK, "--out", |stage| {
+        let failed = write_folder(&report, MARK, |stage| {
             write_atomic(&stage.join("a.md"), |w| writeln!(w, "new"))?;
             Err::<(), _>(Error::Numerical("the plot failed".into()))
         });
@@ -617,7 +647,7 @@ mod tests {
         );
         assert!(leftovers(&report).is_empty());
 
-        write_folder(&report, MARK, "--out", |stage| {
+        write_folder(&report, MARK, |stage| {
             write_atomic(&stage.join("a.md"), |w| writeln!(w, "new"))?;
             write_atomic(&stage.join("plots/b.png"), |w| writeln!(w, "b"))
         })
@@ -648,7 +678,7 @@ mod tests {
         let report = dir.path().join("report");
         let outside = dir.path().join("outside");
         std::fs::create_dir_all(&outside).unwrap();
-        write_folder(&report, REPORT, "--out", |stage| {
+        write_folder(&report, REPORT, |stage| {
             for file in [
                 "report.md",
                 "old.csv",
@@ -681,7 +711,7 @@ mod tests {
         std::fs::write(outside.join("data.npy"), "theirs").unwrap();
         std::fs::remove_file(report.join("linked.npy")).unwrap();
         std::os::unix::fs::symlink(outside.join("data.npy"), report.join("linked.npy")).unwrap();
-        write_folder(&report, REPORT, "--out", |stage| {
+        write_folder(&report, REPORT, |stage| {
             write_atomic(&stage.join("report.md"), |w| writeln!(w, "# a report"))?;
             write_atomic(&stage.join("plots/kept.png"), |w| writeln!(w, "new"))
         })
@@ -714,9 +744,10 @@ mod tests {
         assert!(leftovers(&report).is_empty());
     }
 
-    /// A `manifest.txt` that is not this tool's is refused before anything moves, and a file that
-    /// appears during the run in a folder without a report is never replaced; one that does not clash
-    /// with the report stays beside it.
+    /// A `manifest.txt` that is not this tool's (other text, or a folder) is refused before any work;
+    /// a file the earlier report did not write (one that appeared during the run, or one of the user's
+    /// where the new report puts a plot) is never replaced; one that does not clash stays beside the
+    /// report. A report from before the manifest has its files replaced and none pruned.
     #[test]
     fn foreign_files_are_never_replaced() {
         let dir = tempfile::tempdir().unwrap();
@@ -724,30 +755,59 @@ mod tests {
         std::fs::create_dir_all(&report).unwrap();
         std::fs::write(report.join("report.md"), "# a report").unwrap();
         std::fs::write(report.join(MANIFEST), "plots/a.png").unwrap();
-        let e = write_folder(&report, REPORT, "--out", |stage| {
-            write_atomic(&stage.join("report.md"), |w| writeln!(w, "# a report"))
-        })
-        .unwrap_err();
+        let e = check_report_folder(&report, REPORT, "--out").unwrap_err();
         assert_eq!(e.exit_code(), 2);
         assert!(e.to_string().contains("not written by anisospec"), "{e}");
         assert_eq!(read_to(&report, MANIFEST), "plots/a.png");
+        std::fs::remove_file(report.join(MANIFEST)).unwrap();
+        std::fs::create_dir(report.join(MANIFEST)).unwrap();
+        let e = check_report_folder(&report, REPORT, "--out").unwrap_err();
+        assert!(e.to_string().contains("not written by anisospec"), "{e}");
+
+        // Before the manifest: the earlier report's files are replaced, nothing is pruned.
+        let legacy = dir.path().join("legacy");
+        std::fs::create_dir_all(&legacy).unwrap();
+        std::fs::write(legacy.join("report.md"), "# a report").unwrap();
+        std::fs::write(legacy.join("old.png"), "old").unwrap();
+        write_folder(&legacy, REPORT, |stage| {
+            write_atomic(&stage.join("report.md"), |w| writeln!(w, "# a report"))
+        })
+        .unwrap();
+        assert_eq!(read_to(&legacy, "report.md"), "# a report\n");
+        assert_eq!(read_to(&legacy, "old.png"), "old");
+        // With the manifest: the user's picture where the new report puts one stops the move.
+        std::fs::write(legacy.join("new.png"), "mine").unwrap();
+        let e = write_folder(&legacy, REPORT, |stage| {
+            write_atomic(&stage.join("report.md"), |w| writeln!(w, "# a report"))?;
+            write_atomic(&stage.join("new.png"), |w| writeln!(w, "plot"))
+        })
+        .unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(
+            e.to_string()
+                .contains("the earlier report did not write it"),
+            "{e}"
+        );
+        assert_eq!(read_to(&legacy, "new.png"), "mine");
+        assert!(leftovers(&legacy).is_empty());
 
         let empty = dir.path().join("empty");
-        let e = write_folder(&empty, REPORT, "--out", |stage| {
+        let e = write_folder(&empty, REPORT, |stage| {
             std::fs::write(empty.join("report.md"), "theirs").unwrap();
             write_atomic(&stage.join("report.md"), |w| writeln!(w, "# a report"))
         })
         .unwrap_err();
         assert_eq!(e.exit_code(), 2);
         assert!(
-            e.to_string().contains("appeared there during the run"),
+            e.to_string()
+                .contains("the earlier report did not write it"),
             "{e}"
         );
         assert_eq!(read_to(&empty, "report.md"), "theirs");
         assert!(leftovers(&empty).is_empty());
 
         let fresh = dir.path().join("fresh");
-        write_folder(&fresh, REPORT, "--out", |stage| {
+        write_folder(&fresh, REPORT, |stage| {
             std::fs::write(fresh.join("notes.txt"), "mine").unwrap();
             write_atomic(&stage.join("report.md"), |w| writeln!(w, "# a report"))
         })
@@ -770,12 +830,12 @@ mod tests {
         std::fs::write(report.join("report.md"), "# a report").unwrap();
         std::fs::write(
             report.join(MANIFEST),
-            format!("{MANIFEST_HEADER}\nplots/\nplots/theirs.png\n"),
+            format!("{MANIFEST_HEADER}\nplots/\nplots/theirs.png\nreport.md\n"),
         )
         .unwrap();
         std::fs::write(shared.join("theirs.png"), "theirs").unwrap();
         std::os::unix::fs::symlink(&shared, report.join("plots")).unwrap();
-        write_folder(&report, REPORT, "--out", |stage| {
+        write_folder(&report, REPORT, |stage| {
             write_atomic(&stage.join("report.md"), |w| writeln!(w, "# a report"))?;
             write_atomic(&stage.join("plots/new.png"), |w| writeln!(w, "new"))
         })
@@ -799,10 +859,7 @@ mod tests {
         let folder = dir.path().join("sources");
         std::fs::create_dir_all(&folder).unwrap();
         std::fs::write(folder.join("data.npy"), "mine").unwrap();
-        let e = write_folder(&folder, REPORT, "--out", |stage| {
-            write_atomic(&stage.join("report.md"), |w| writeln!(w, "new"))
-        })
-        .unwrap_err();
+        let e = check_report_folder(&folder, REPORT, "--out").unwrap_err();
         assert_eq!(e.exit_code(), 2);
         let text = e.to_string();
         assert!(
@@ -813,11 +870,12 @@ mod tests {
             std::fs::read_to_string(folder.join("data.npy")).unwrap(),
             "mine"
         );
-        assert!(!folder.join("report.md").exists());
-        assert!(leftovers(&folder).is_empty());
-        // A report.md that is not this tool's (another first line) marks no earlier report.
+        // A report.md that is not this tool's (another first line) marks no earlier report; and a
+        // report in the folder would not replace it.
         std::fs::write(folder.join("report.md"), "# Our quarterly report").unwrap();
-        let e = write_folder(&folder, REPORT, "--out", |stage| {
+        let e = check_report_folder(&folder, REPORT, "--out").unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        let e = write_folder(&folder, REPORT, |stage| {
             write_atomic(&stage.join("report.md"), |w| writeln!(w, "# a report"))
         })
         .unwrap_err();
@@ -826,10 +884,12 @@ mod tests {
             std::fs::read_to_string(folder.join("report.md")).unwrap(),
             "# Our quarterly report"
         );
+        assert!(leftovers(&folder).is_empty());
 
         let empty = dir.path().join("empty");
         std::fs::create_dir_all(empty.join(".anisospec-killed")).unwrap();
-        write_folder(&empty, REPORT, "--out", |stage| {
+        check_report_folder(&empty, REPORT, "--out").unwrap();
+        write_folder(&empty, REPORT, |stage| {
             write_atomic(&stage.join("report.md"), |w| writeln!(w, "new"))
         })
         .unwrap();
@@ -844,7 +904,7 @@ mod tests {
         let report = dir.path().join("report");
         std::fs::create_dir_all(report.join("z.md")).unwrap();
         std::fs::write(report.join("a.md"), "# a report").unwrap();
-        let e = write_folder(&report, MARK, "--out", |stage| {
+        let e = write_folder(&report, MARK, |stage| {
             write_atomic(&stage.join("a.md"), |w| writeln!(w, "a"))?;
             write_atomic(&stage.join("z.md"), |w| writeln!(w, "z"))
         })
@@ -898,7 +958,7 @@ mod tests {
         std::fs::create_dir_all(&report).unwrap();
         std::os::unix::fs::symlink(elsewhere.path(), report.join("plots")).unwrap();
         std::fs::write(report.join("a.md"), "# a report").unwrap();
-        write_folder(&report, MARK, "--out", |stage| {
+        write_folder(&report, MARK, |stage| {
             write_atomic(&stage.join("plots/a.png"), |w| writeln!(w, "a"))
         })
         .unwrap();

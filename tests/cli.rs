@@ -25,10 +25,12 @@ fn rejects(args: &[&str], needle: &str, out: &Path) {
 
 /// The address space, in KiB, [`rejects_in_small_memory`] gives the binary: 256 MiB, far below the
 /// gigabytes the refused sizes would take, and several times what a refusal needs.
+#[cfg(target_os = "linux")]
 const SMALL_MEMORY_KIB: u64 = 256 * 1024;
 
 /// Runs the binary with `args` under `ulimit -v` of [`SMALL_MEMORY_KIB`] (Linux enforces it on every
 /// allocation).
+#[cfg(target_os = "linux")]
 fn anisospec_in_small_memory(args: &[&str]) -> std::process::Output {
     Command::new("sh")
         .arg("-c")
@@ -43,6 +45,7 @@ fn anisospec_in_small_memory(args: &[&str]) -> std::process::Output {
 
 /// [`rejects`] in a small address space: a refusal that came only after allocating the refused size
 /// would abort on the failed allocation instead of exiting with 2.
+#[cfg(target_os = "linux")]
 fn rejects_in_small_memory(args: &[&str], needle: &str, out: &Path) {
     refused(&anisospec_in_small_memory(args), args, needle, out);
 }
@@ -625,7 +628,9 @@ fn npy_headers_that_overflow_or_lie_are_rejected() {
 }
 
 /// Sizes above the coordinate limit are refused before their points are allocated: each refusal runs
-/// in an address space far smaller than the refused size, where an allocation first would abort.
+/// in an address space far smaller than the refused size, where an allocation first would abort
+/// (Linux only: it relies on `ulimit -v` being enforced).
+#[cfg(target_os = "linux")]
 #[test]
 fn sizes_above_the_coordinate_limit_are_refused_at_once() {
     let (dir, out) = tmp("big.npy");

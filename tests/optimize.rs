@@ -142,10 +142,12 @@ fn gradient_matches_finite_differences_for_every_target_kind() {
 /// contracts (tests/nufft.rs, `spectrum::nufft`): P errs by at most 10·eps relative (so F by 5·eps), and
 /// a type-2 transform by 10·eps in relative l2. The gradient is a type-2 transform of coefficients
 /// `∂L/∂P(k) · F(k) · 2πik`, whose factors' relative errors add to first order: 10·eps (∂L/∂P, through
-/// P) + 5·eps (F) + 10·eps (the type-2), so 25·eps. The loss's terms are smooth functions of P and
-/// err by 10·eps relative each, twice that for a squared difference: 20·eps. (Measured: gradient
-/// 5e-11 to 2.6e-9 at eps = 1e-6 and 4e-12 to 1.1e-11 at 1e-9, far inside; a gradient that drops a
-/// term errs by 1e-3 or more, and one that ignores eps by 2.5e-7 at eps = 1e-3.)
+/// P) + 5·eps (F) + 10·eps (the type-2), so 25·eps; the loss, 20·eps. Both assume what these random
+/// sets give: that `P` is not close to its target where the loss weighs it (a squared difference
+/// `(P − T)²` errs by `10·eps · 2P / |P − T|` relative, unbounded as `P → T`), and that the bins under
+/// the contract's floor (1e-3 of the mean) carry a negligible share. (Measured: gradient 5e-11 to
+/// 2.6e-9 at eps = 1e-6 and 4e-12 to 1.1e-11 at 1e-9, far inside; a gradient that drops a term errs
+/// by 1e-3 or more, and one that ignores eps by 2.5e-7 at eps = 1e-3.)
 #[test]
 fn nufft_gradient_matches_exact_gradient() {
     let dir = tempfile::tempdir().unwrap();

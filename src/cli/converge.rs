@@ -124,9 +124,9 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         match &s.fit {
             // Through two N the line fits exactly: no degree of freedom is left to measure the scatter
             // (chi2/dof), and the interval holds only the two points' own errors, not a curvature.
-            // A standard error of 0 (realizations that agree by chance) defines no weight: no interval.
+            // A standard error within rounding defines no weight: no interval.
             Some(fit) if fit.interval().is_none() => println!(
-                "{}: slope {:.3} (95% CI —, chi2/dof —: the realizations' standard error is no more than f64 rounding alone gives (an estimator with the same error for every shift), which gives no interval; if the set is random, raise --realizations)",
+                "{}: slope {:.3} (95% CI —, chi2/dof —: the realizations differ by no more than f64 rounding, as for an estimator with the same error for every shift; no interval. If the set is random, raise --realizations)",
                 s.sampler, fit.slope
             ),
             Some(fit) if s.points.len() == 2 => println!(

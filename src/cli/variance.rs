@@ -130,7 +130,7 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
                 fit.slope
             ),
             None => println!(
-                "predicted slope {:.3} (95% CI —: the realizations' standard error is no more than the spectrum method's own error gives (--eps, or f64 rounding with --exact): a set whose spectrum is the same for every shift, e.g. a lattice, which gives no interval)",
+                "predicted slope {:.3} (95% CI —: the realizations differ by no more than the spectrum method's own error (--eps, or f64 rounding with --exact), as for a set whose spectrum is the same for every shift (e.g. a lattice); no interval)",
                 fit.slope
             ),
         }

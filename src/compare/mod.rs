@@ -291,7 +291,7 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
                 class: s.class.clone(),
                 sampler: spec.label(),
                 family: spec.family(),
-                fit: fit_points(&points, s.integrand.reference().value),
+                fit: fit_points(&points, cfg.realizations, s.integrand.reference().value),
                 points,
                 setup_seconds: setup,
             });

@@ -455,7 +455,7 @@ fn write_markdown(
         {
             writeln!(
                 w,
-                "| {label} | {class} | {integral:.6} | ({}, {}) | [{}, {}] |",
+                "| {label} | {class} | {integral:.4e} | ({}, {}) | [{}, {}] |",
                 shear_text(shear.0),
                 shear_text(shear.1),
                 shear_text(range.0),

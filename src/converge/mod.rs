@@ -180,7 +180,7 @@ pub fn converge(
         progress(&p);
         points.push(p);
     }
-    let fit = fit_points(&points, f.reference().value);
+    let fit = fit_points(&points, cfg.realizations, f.reference().value);
     Ok(Convergence {
         sampler: sampler.name(),
         integrand: f.name(),
@@ -190,11 +190,14 @@ pub fn converge(
 }
 
 /// `MSE ∝ N^slope` fitted through measured points (`None` with fewer than two N or a zero MSE), each
-/// point's standard error weighed against its [`rounding_floor`] for the integral `integral` (with
-/// `R = evaluations / n` realizations). A
-/// repeated N counts once (its first point): a sampler held at its largest N by several requested N
-/// repeats one measurement, which must not narrow the fit's interval.
-pub fn fit_points(points: &[ConvergePoint], integral: f64) -> Option<SlopeFit> {
+/// point's standard error weighed against its [`rounding_floor`] for `realizations` per point and the
+/// integral `integral`. A repeated N counts once (its first point): a sampler held at its largest N
+/// by several requested N repeats one measurement, which must not narrow the fit's interval.
+pub fn fit_points(
+    points: &[ConvergePoint],
+    realizations: usize,
+    integral: f64,
+) -> Option<SlopeFit> {
     let mut seen = std::collections::HashSet::new();
     let distinct: Vec<&ConvergePoint> = points.iter().filter(|p| seen.insert(p.n)).collect();
     let n: Vec<f64> = distinct.iter().map(|p| p.n as f64).collect();
@@ -202,7 +205,7 @@ pub fn fit_points(points: &[ConvergePoint], integral: f64) -> Option<SlopeFit> {
     let se: Vec<f64> = distinct.iter().map(|p| p.mse_stderr).collect();
     let floor: Vec<f64> = distinct
         .iter()
-        .map(|p| rounding_floor(p.n, (p.evaluations / p.n as u64) as usize, p.mse, integral))
+        .map(|p| rounding_floor(p.n, realizations, p.mse, integral))
         .collect();
     fit_power_law(&n, &v, &se, &floor).ok()
 }
@@ -349,8 +352,11 @@ mod tests {
         let mut repeated = distinct.to_vec();
         repeated.push(point(256, 3e-4));
         repeated.push(point(256, 3e-4));
-        assert!(fit_points(&distinct, 0.5).is_some());
-        assert_eq!(fit_points(&repeated, 0.5), fit_points(&distinct, 0.5));
-        assert!(fit_points(&[point(256, 3e-4), point(256, 3e-4)], 0.5).is_none());
+        assert!(fit_points(&distinct, 100, 0.5).is_some());
+        assert_eq!(
+            fit_points(&repeated, 100, 0.5),
+            fit_points(&distinct, 100, 0.5)
+        );
+        assert!(fit_points(&[point(256, 3e-4), point(256, 3e-4)], 100, 0.5).is_none());
     }
 }

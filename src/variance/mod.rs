@@ -306,20 +306,29 @@ fn realizations(
 }
 
 /// The relative error of each realization's `V_r` (and of each cone's share) that the spectrum's
-/// computation allows, at `n` points on a `res × res` grid. `V_r` is a sum of `|f̂|² P(k) / N ≥ 0`, so
-/// its relative error is at most the largest of its terms':
-/// - full-grid NUFFT sums: `10 · eps`, the accuracy contract of [`crate::spectrum::nufft::Nufft2d`]
-///   on bins above 1e-3 of the mean power (a bin far below carries a negligible share of `V_r`);
-/// - the exact DFT, and the exact sums at sparse frequencies: f64 rounding over the `N` points. Each
-///   term `exp(−2πi k·x)` errs by at most `π K u` from the rounding of `k·x` (at most `u K / 2`
-///   turns) and `200 u` from its sine and cosine, products and the at most 32 steps of the sparse
-///   recurrence; summing `N` terms of modulus 1 errs by at most `(N − 1) u N`. Relative to `|F| = N`,
-///   the bins where a set with the same spectrum for every shift (a lattice) puts its power, `F`
-///   errs by `(N + π K + 200) u`, and `P = |F|² / N` by twice that. (Bins where `F` is 0 exactly
-///   get `|ΔF|² / N`, second order.)
+/// computation allows, at `n` points on a `res × res` grid (`K = res`, `u = 2^−53`), for a set whose
+/// spectrum is the same for every shift (a lattice): the floor under which a spread of `V_r` is
+/// rounding, not sampling. First-order bounds, step by step:
+/// - a phase `exp(−2πi k c)` computed directly: `k c` rounds by `u K / 2` turns (`|k| ≤ K / 2`,
+///   `c < 1`), `2π t` by `2u` relative, sine and cosine by `u` each, so it errs by at most
+///   `(π K + 4π + 2) u ≤ (π K + 15) u`; one step of the sparse recurrence (`phases`, at most 32 steps
+///   between direct values) multiplies by `exp(−2πi c)`, itself within `(6π + 2) u ≤ 21 u`, with a
+///   complex product's `√2·2 u ≤ 3 u`: `24 u` a step, `768 u` over 32;
+/// - a term `e1 · e2` of `F` then errs by at most `2 (π K + 15 + 768) u + 3 u`, and the sum of `N`
+///   terms of modulus 1 by `√2 (N − 1) u N` more (each component summed in order), so at the bins
+///   where such a set puts its power (`|F| = N`) `F` errs by `ρ_F = (√2 N + 2 π K + 1569) u`
+///   relative, and `P = |F|² / N` by `2 ρ_F + 2 u` (bins where `F` is 0 get `|ΔF|² / N`, second
+///   order);
+/// - full-grid NUFFT sums instead: `10 · eps`, the accuracy contract of
+///   [`crate::spectrum::nufft::Nufft2d`] on bins above 1e-3 of the mean power (a bin far below
+///   carries a negligible share of `V_r`);
+/// - `V_r` sums `m` non-negative terms `|f̂|² P / N` (each rounded by `2 u`), which adds `(m + 1) u`.
 fn relative_error(spec: &Spectrum, res: usize, n: usize, method: Method) -> f64 {
     let u = f64::EPSILON / 2.0;
-    let rounding = 2.0 * (n as f64 + std::f64::consts::PI * res as f64 + 200.0) * u;
+    let f_error =
+        (std::f64::consts::SQRT_2 * n as f64 + 2.0 * std::f64::consts::PI * res as f64 + 1569.0)
+            * u;
+    let rounding = 2.0 * f_error + 2.0 * u;
     let nufft = match method {
         Method::Nufft { eps } => 10.0 * eps,
         Method::Exact => 0.0,
@@ -328,11 +337,13 @@ fn relative_error(spec: &Spectrum, res: usize, n: usize, method: Method) -> f64 
         .active
         .iter()
         .any(|a| !a.is_empty() && full_grid(a.len(), res));
-    if uses_method {
+    let terms = spec.active.iter().map(Vec::len).sum::<usize>() as f64;
+    let per_bin = if uses_method {
         rounding.max(nufft)
     } else {
         rounding
-    }
+    };
+    per_bin + (terms + 1.0) * u
 }
 
 /// The floor of a point's relative standard error ([`fit_power_law`]) when each realization's value

@@ -1089,9 +1089,10 @@ fn compare_refuses_an_output_folder_that_is_a_file() {
 }
 
 /// A report folder that holds other files (not an earlier report, which a new one replaces) is refused
-/// before any work, naming a file; nothing is written and the files stay as they were.
+/// before any work, naming a file, and so is a cache inside the report folder; nothing is written and
+/// the files stay as they were.
 #[test]
-fn compare_refuses_a_folder_of_other_files() {
+fn compare_refuses_a_folder_of_other_files_and_a_cache_inside_the_report() {
     let dir = tempfile::tempdir().unwrap();
     let sources = dir.path().join("sources");
     std::fs::create_dir_all(&sources).unwrap();
@@ -1116,6 +1117,21 @@ fn compare_refuses_a_folder_of_other_files() {
     );
     assert_eq!(std::fs::read_dir(&sources).unwrap().count(), 1);
     assert!(!cache.exists());
+
+    let report = dir.path().join("report");
+    for inside in [report.join("cache"), report.clone()] {
+        rejects(
+            &[
+                "compare",
+                "--out",
+                report.to_str().unwrap(),
+                "--cache",
+                inside.to_str().unwrap(),
+            ],
+            "inside the report folder",
+            &report,
+        );
+    }
 }
 
 /// `anisospec gallery`: an index row per sampler (11 in 2D, 9 in 4D), each linking a PNG and a radial

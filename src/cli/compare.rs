@@ -24,7 +24,7 @@ pub struct CompareArgs {
     pub print_config: bool,
     /// Report folder: report.md, plots/, spectra/, CSV and npy, and manifest.txt listing them. A new
     /// report replaces an earlier one there (the files its manifest lists go; your own files stay); a
-    /// folder of other files is refused.
+    /// folder of other files is refused, and so is a --cache inside it.
     #[arg(long, default_value = "out/compare")]
     pub out: PathBuf,
     /// Cache of pixel references and optimized tables, reused across runs (default $ANISOSPEC_CACHE

@@ -251,12 +251,12 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
 }
 
 /// Runs the study and writes the report folder `out`, replacing an earlier report there. A bad config,
-/// an `out` or `cache_dir` that is (or lies under) a file, and an `out` holding other files than an
-/// earlier report are refused before any work.
+/// an `out` or `cache_dir` that is (or lies under) a file, an `out` holding other files than an
+/// earlier report, and a `cache_dir` inside `out` are refused before any work.
 pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outcome> {
     config.validate()?;
-    crate::output::check_folder(out, "--out", "report")?;
     crate::output::check_report_folder(out, REPORT_MARKER, "--out")?;
+    check_cache_outside(cache_dir, out)?;
     crate::output::check_folder(cache_dir, "--cache", "cache")?;
     let started = Instant::now();
     let subjects = subjects(config, cache_dir)?;
@@ -321,6 +321,22 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
         report::write(&outcome, &specs, &tables, staging)
     })?;
     Ok(outcome)
+}
+
+/// Refuses a cache folder inside the report folder `out` (or the same folder), before any work: a
+/// cache is no part of a report, and a run stopped before it writes its report would leave the folder
+/// holding the cache and no report, which the next run refuses.
+fn check_cache_outside(cache_dir: &Path, out: &Path) -> Result<()> {
+    use crate::output::resolved;
+    if resolved(cache_dir)?.starts_with(resolved(out)?) {
+        return Err(Error::Usage(format!(
+            "--cache {} lies inside the report folder --out {}; keep the cache beside the report \
+             (the default is out/cache beside out/compare)",
+            cache_dir.display(),
+            out.display()
+        )));
+    }
+    Ok(())
 }
 
 /// The samplers that follow the oracle (sheared and optimized), on the subjects that have a shear,

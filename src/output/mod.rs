@@ -101,7 +101,7 @@ pub fn write_group<T>(
 /// The file in a report folder that lists every file and subfolder the report wrote, one path per
 /// line relative to the folder (`/`-separated, a folder ending in `/`), after a header line. The next
 /// report written there removes the listed files it does not write again, and nothing else: notes, a
-/// study's TOML, a target's image or a cache kept in the folder stay.
+/// study's TOML or a target's image kept in the folder stay.
 pub const MANIFEST: &str = "manifest.txt";
 
 /// The first line of every [`MANIFEST`]: a `manifest.txt` without it is not this tool's.
@@ -128,11 +128,17 @@ impl ReportMarker {
 }
 
 /// Checks, before any work, that `dest` (given by `flag`) may take a report marked by `marker`: it is
-/// missing, empty, or holds an earlier report (its marker, and a [`MANIFEST`] of this tool if any). A
-/// report folder holds one report, so a folder of other files (sources, say) is refused with a usage
+/// missing, empty, or holds an earlier report (its marker, and a [`MANIFEST`] of this tool if any),
+/// and it (or the nearest folder above it that exists) takes new files. A report folder holds one
+/// report, so a folder of other files (sources, say) is refused with a usage
 /// error naming it and the fix, and nothing in it is touched. Every caller of [`write_folder`] calls
 /// this first, before the work that fills the report.
 pub fn check_report_folder(dest: &Path, marker: ReportMarker, flag: &str) -> Result<()> {
+    check_folder(dest, flag, "report")?;
+    // The folder, or the nearest one above it that exists, must take new files.
+    if let Some(existing) = dest.ancestors().find(|a| a.is_dir()) {
+        probe_folder(existing)?;
+    }
     if !dest.is_dir() {
         return Ok(());
     }
@@ -206,7 +212,8 @@ pub fn write_folder<T>(
         let before_manifest = earlier.is_none() && marker.is_in(dest);
         let earlier = earlier.unwrap_or_default();
         let incoming = check_tree(staging.path(), dest, |target| {
-            before_manifest || earlier.iter().any(|e| e == target)
+            in_real_folders(dest, target)
+                && (before_manifest || earlier.iter().any(|e| e == target))
         })?;
         write_manifest(dest, earlier.iter().chain(&incoming))?;
         let written = move_tree(staging.path(), dest)?;
@@ -259,7 +266,8 @@ fn walk_tree(
 
 /// Checks, before anything moves, that every file under `from` can go to the same place under `to`:
 /// no folder where a file goes, no file where a folder goes, and no existing file where a file goes
-/// unless `replaceable` (the earlier report's). Returns the places under `to`, files and folders.
+/// unless `replaceable` (the earlier report's, in the report's own folders). Returns the places under
+/// `to`, files and folders.
 fn check_tree(from: &Path, to: &Path, replaceable: impl Fn(&Path) -> bool) -> Result<Vec<PathBuf>> {
     let mut targets = Vec::new();
     walk_tree(from, to, &mut |_, target, is_folder| {
@@ -275,7 +283,7 @@ fn check_tree(from: &Path, to: &Path, replaceable: impl Fn(&Path) -> bool) -> Re
         if !is_folder && target.symlink_metadata().is_ok() && !replaceable(target) {
             return Err(Error::Usage(format!(
                 "cannot write {}: a file of that name is there and the earlier report did not write it \
-                 (it is not in {MANIFEST}); move it away and run again",
+                 (it is not in {MANIFEST}, or lies in a linked folder); move it away and run again",
                 target.display()
             )));
         }
@@ -305,31 +313,26 @@ fn move_tree(from: &Path, to: &Path) -> Result<Vec<PathBuf>> {
 /// The paths under `dest` that the [`MANIFEST`] of an earlier report lists, files and folders, in
 /// its order; `None` when there is no manifest. A listed path that leaves `dest` (absolute, or
 /// through `..`) is never returned. A `manifest.txt` that is not this tool's (another first line, not
-/// text, a folder) is refused with a usage error naming the fix.
+/// text) or cannot be read (a folder, a link loop) is refused with a usage error naming the fix.
 fn read_manifest(dest: &Path) -> Result<Option<Vec<PathBuf>>> {
     let path = dest.join(MANIFEST);
-    let foreign = || {
+    let foreign = |why: &str| {
         Error::Usage(format!(
-            "{} was not written by anisospec, and a report writes its list of files there; move it away",
+            "{} {why}, and a report writes its list of files there; move it away",
             path.display()
         ))
     };
     let text = match std::fs::read_to_string(&path) {
         Ok(text) => text,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e)
-            if matches!(
-                e.kind(),
-                std::io::ErrorKind::InvalidData | std::io::ErrorKind::IsADirectory
-            ) =>
-        {
-            return Err(foreign())
+        Err(e) if e.kind() == std::io::ErrorKind::InvalidData => {
+            return Err(foreign("was not written by anisospec (it is not text)"))
         }
-        Err(e) => return Err(Error::io("read", &path, e)),
+        Err(e) => return Err(foreign(&format!("cannot be read ({e})"))),
     };
     let mut lines = text.lines();
     if lines.next() != Some(MANIFEST_HEADER) {
-        return Err(foreign());
+        return Err(foreign("was not written by anisospec"));
     }
     Ok(Some(
         lines
@@ -373,17 +376,22 @@ fn write_manifest<'a>(dest: &Path, paths: impl Iterator<Item = &'a PathBuf>) -> 
     })
 }
 
+/// Whether every folder between `dest` and `path` (under it) is a real folder, not a link: the
+/// report owns only what lies in its own folders.
+fn in_real_folders(dest: &Path, path: &Path) -> bool {
+    path.ancestors()
+        .skip(1)
+        .take_while(|a| *a != dest)
+        .all(is_real_folder)
+}
+
 /// Removes the stale outputs of an earlier report: each path in `earlier` (its manifest) that the new
 /// report did not write. A file goes only when it and every folder between it and `dest` are real
 /// (a link is removed, never followed); a folder goes only when it is then empty, deepest first.
 fn prune_stale(dest: &Path, earlier: &[PathBuf], written: &[PathBuf]) -> Result<()> {
-    let inside = |path: &Path| {
-        path.ancestors()
-            .skip(1)
-            .take_while(|a| *a != dest)
-            .all(is_real_folder)
-    };
-    let stale = earlier.iter().filter(|p| !written.contains(p) && inside(p));
+    let stale = earlier
+        .iter()
+        .filter(|p| !written.contains(p) && in_real_folders(dest, p));
     let mut folders = Vec::new();
     for path in stale {
         if is_real_folder(path) {
@@ -547,9 +555,35 @@ pub fn check_folder(dir: &Path, flag: &str, what: &str) -> Result<()> {
 }
 
 /// The existing file, if any, that stands where the folder `dir` (or one of its ancestors) must go: the
-/// nearest ancestor that exists, when it is not a folder.
+/// nearest ancestor that exists, when it is not a folder (a file, or a link that leads to no folder).
 pub fn file_in_the_way(dir: &Path) -> Option<&Path> {
-    dir.ancestors().find(|a| a.exists()).filter(|a| !a.is_dir())
+    dir.ancestors()
+        .find(|a| a.symlink_metadata().is_ok())
+        .filter(|a| !a.is_dir())
+}
+
+/// The absolute path of `path`, whether it exists or not: links and `..` resolved in the part that
+/// exists, `.` and `..` taken literally in the rest.
+pub fn resolved(path: &Path) -> Result<PathBuf> {
+    let absolute = std::path::absolute(path).map_err(|e| Error::io("resolve", path, e))?;
+    let existing = absolute
+        .ancestors()
+        .find(|a| a.exists())
+        .unwrap_or(Path::new("/"));
+    let mut out = existing
+        .canonicalize()
+        .map_err(|e| Error::io("resolve", existing, e))?;
+    let rest = absolute.strip_prefix(existing).unwrap_or(Path::new(""));
+    for part in rest.components() {
+        match part {
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            std::path::Component::Normal(name) => out.push(name),
+            _ => {}
+        }
+    }
+    Ok(out)
 }
 
 /// Whether two paths name the same file: the same absolute path, or the same file once links are
@@ -762,7 +796,8 @@ mod tests {
         std::fs::remove_file(report.join(MANIFEST)).unwrap();
         std::fs::create_dir(report.join(MANIFEST)).unwrap();
         let e = check_report_folder(&report, REPORT, "--out").unwrap_err();
-        assert!(e.to_string().contains("not written by anisospec"), "{e}");
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("cannot be read"), "{e}");
 
         // Before the manifest: the earlier report's files are replaced, nothing is pruned.
         let legacy = dir.path().join("legacy");
@@ -894,6 +929,58 @@ mod tests {
         })
         .unwrap();
         assert!(empty.join("report.md").is_file());
+    }
+
+    /// A file that the earlier report listed but that now lies behind a link (its folder replaced by
+    /// a link to someone else's) is never replaced: the move stops first, and the file keeps its bytes.
+    /// A dangling link where the report folder goes, and a manifest that is a link loop, are usage
+    /// errors before any work.
+    #[cfg(unix)]
+    #[test]
+    fn files_behind_links_are_never_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let report = dir.path().join("report");
+        let theirs = dir.path().join("theirs");
+        let write = |stage: &Path| {
+            write_atomic(&stage.join("report.md"), |w| writeln!(w, "# a report"))?;
+            write_atomic(&stage.join("spectra/x.npy"), |w| writeln!(w, "new"))
+        };
+        write_folder(&report, REPORT, write).unwrap();
+        std::fs::create_dir_all(&theirs).unwrap();
+        std::fs::write(theirs.join("x.npy"), "theirs").unwrap();
+        std::fs::remove_dir_all(report.join("spectra")).unwrap();
+        std::os::unix::fs::symlink(&theirs, report.join("spectra")).unwrap();
+        check_report_folder(&report, REPORT, "--out").unwrap();
+        let e = write_folder(&report, REPORT, write).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("lies in a linked folder"), "{e}");
+        assert_eq!(read_to(&theirs, "x.npy"), "theirs");
+        assert!(leftovers(&report).is_empty());
+
+        let dangling = dir.path().join("dangling");
+        std::os::unix::fs::symlink(dir.path().join("nowhere"), &dangling).unwrap();
+        let e = check_report_folder(&dangling, REPORT, "--out").unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("not a folder"), "{e}");
+
+        std::fs::remove_file(report.join(MANIFEST)).unwrap();
+        std::os::unix::fs::symlink(report.join(MANIFEST), report.join(MANIFEST)).unwrap();
+        let e = check_report_folder(&report, REPORT, "--out").unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("cannot be read"), "{e}");
+    }
+
+    /// A path resolves through its existing part (links, `..`) and literally beyond it.
+    #[test]
+    fn paths_resolve_beyond_what_exists() {
+        let dir = tempfile::tempdir().unwrap();
+        let base = dir.path().canonicalize().unwrap();
+        std::fs::create_dir_all(base.join("a")).unwrap();
+        assert_eq!(
+            resolved(&base.join("a/../b/c/../d")).unwrap(),
+            base.join("b/d")
+        );
+        assert_eq!(resolved(&base.join("a/./e")).unwrap(), base.join("a/e"));
     }
 
     /// A folder standing where a new file goes stops the move before any file moves, with a usage

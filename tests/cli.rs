@@ -2408,3 +2408,26 @@ fn variance_of_a_wide_fan_finishes_finite() {
     let variance: f64 = row.split(',').nth(1).unwrap().parse().unwrap();
     assert!(variance.is_finite() && variance > 0.0, "{row}");
 }
+
+/// An N of `ns` near `usize::MAX` is refused by the coordinate limit before any sampler looks for its
+/// nearest valid N (a search one count at a time that used to spin for many minutes, and wrap).
+#[test]
+fn compare_refuses_an_n_near_usize_max_before_searching() {
+    let (dir, config) = tmp("study.toml");
+    let out = dir.path().join("report");
+    let (c, o) = (config.to_str().unwrap(), out.to_str().unwrap());
+    for ns in ["[16, 18446744073709551615]", "[18446744073709551615, 16]"] {
+        std::fs::write(&config, format!("ns = {ns}\n")).unwrap();
+        rejects(
+            &["compare", "--config", c, "--out", o],
+            "ns asks for N = 18446744073709551615: N × sets × D",
+            &out,
+        );
+    }
+    std::fs::write(&config, "spectra_n = 18446744073709551615\n").unwrap();
+    rejects(
+        &["compare", "--config", c, "--out", o],
+        "spectra_n = 18446744073709551615: N × sets × D",
+        &out,
+    );
+}

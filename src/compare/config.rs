@@ -192,6 +192,11 @@ impl CompareConfig {
                 "ns needs at least two positive sizes for a slope, e.g. ns = [16, 64, 256]".into(),
             ));
         }
+        // Before any sampler looks for its nearest valid N: that search steps one count at a time.
+        for &n in &self.ns {
+            crate::points::coordinate_count(1, n, 4)
+                .map_err(|e| Error::Usage(format!("ns asks for N = {n}: {e}")))?;
+        }
         if self.realizations < 2 {
             return Err(Error::Usage(
                 "realizations must be at least 2 for a standard error".into(),
@@ -472,6 +477,8 @@ impl CompareConfig {
                 "spectra_n = 0 asks for no points; give at least 1, e.g. spectra_n = 256".into(),
             ));
         }
+        crate::points::coordinate_count(1, self.spectra_n, 4)
+            .map_err(|e| Error::Usage(format!("spectra_n = {}: {e}", self.spectra_n)))?;
         crate::spectrum::check_res_named("spectra_res =", self.spectra_res)?;
         if self.spectra_realizations == 0 {
             return Err(Error::Usage(

@@ -262,23 +262,22 @@ impl CompareConfig {
                 "classical is empty, but every gain in the report is against the best classical sampler; list at least one, e.g. classical = [\"padded-jittered\"]".into(),
             ));
         }
-        for name in self.classical.iter().chain(&self.sheared) {
-            let sampler = crate::samplers::build(name, 4)?;
-            for &n in &self.ns {
-                let n = crate::samplers::usable_n(sampler.as_ref(), n);
-                crate::samplers::validate_n(sampler.as_ref(), n)
-                    .map_err(|e| Error::Usage(format!("ns: {e}")))?;
+        for (key, list) in [("classical", &self.classical), ("sheared", &self.sheared)] {
+            let built = list
+                .iter()
+                .map(|name| crate::samplers::build(name, 4))
+                .collect::<Result<Vec<_>>>()?;
+            distinct_samplers(key, list, &built)?;
+            for sampler in &built {
+                for &n in &self.ns {
+                    let n = crate::samplers::usable_n(sampler.as_ref(), n);
+                    crate::samplers::validate_n(sampler.as_ref(), n)
+                        .map_err(|e| Error::Usage(format!("ns: {e}")))?;
+                }
             }
         }
         if self.tables.is_empty() {
             self.validate_ns_made()?;
-        }
-        for (key, list) in [("classical", &self.classical), ("sheared", &self.sheared)] {
-            if let Some(name) = first_repeat(list) {
-                return Err(Error::Usage(format!(
-                    "{key} lists '{name}' twice; give each sampler once"
-                )));
-            }
         }
         if let Some(mode) = first_repeat(&self.shear_modes) {
             return Err(Error::Usage(format!(
@@ -490,6 +489,30 @@ impl CompareConfig {
     }
 }
 
+/// Refuses a sampler that `key` (`classical` or `sheared`) lists twice, under one name or two
+/// spellings of it (`lattice:1:3:5:7` and `lattice:01:3:5:7`): it would be run twice and reported as
+/// two identical rows. `built` holds the samplers built from `names`, in order.
+fn distinct_samplers(
+    key: &str,
+    names: &[String],
+    built: &[Box<dyn crate::samplers::Sampler>],
+) -> Result<()> {
+    for (j, b) in built.iter().enumerate() {
+        if let Some(i) = built[..j].iter().position(|a| a.name() == b.name()) {
+            let (first, again) = (names[i].trim(), names[j].trim());
+            let which = if first == again {
+                format!("'{first}' twice")
+            } else {
+                format!("'{first}' and '{again}', both the sampler {}", b.name())
+            };
+            return Err(Error::Usage(format!(
+                "{key} lists {which}; give each sampler once, e.g. {key} = [\"{first}\"]"
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// The first item of `list` that appears in it again.
 pub(crate) fn first_repeat<T: PartialEq>(list: &[T]) -> Option<&T> {
     list.iter()
@@ -550,6 +573,40 @@ mod tests {
     #[test]
     fn an_empty_file_is_the_default_suite() {
         assert_eq!(load_text("").unwrap(), CompareConfig::default_suite());
+    }
+
+    #[test]
+    fn a_sampler_listed_twice_is_refused_naming_it() {
+        let twice = |key: &str, list: &[&str]| {
+            let list: Vec<String> = list.iter().map(|s| s.to_string()).collect();
+            let mut study = CompareConfig::default_suite();
+            if key == "classical" {
+                study.classical = list;
+            } else {
+                study.sheared = list;
+            }
+            let e = study.validate().unwrap_err();
+            assert_eq!(e.exit_code(), 2, "{e}");
+            e.to_string()
+        };
+        let m = twice("classical", &["lattice:1:3:5:7", "lattice:01:3:5:7"]);
+        assert!(
+            m.contains("classical lists 'lattice:1:3:5:7' and 'lattice:01:3:5:7'")
+                && m.contains("give each sampler once"),
+            "{m}"
+        );
+        let m = twice("sheared", &["sobol", "padded-mj", "sobol"]);
+        assert!(
+            m.contains("sheared lists 'sobol' twice; give each sampler once"),
+            "{m}"
+        );
+        // One sampler both classical and sheared is two different rows, and allowed.
+        let study = CompareConfig {
+            classical: vec!["sobol".into()],
+            sheared: vec!["sobol".into()],
+            ..CompareConfig::default_suite()
+        };
+        assert!(study.validate().is_ok());
     }
 
     #[cfg(unix)]

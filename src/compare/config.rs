@@ -2,7 +2,7 @@
 //! (a small default and a paper-scale `--full`) or a strict TOML file, in which every key is optional
 //! (a key left out takes the default suite's value) and an unknown key is refused.
 
-use crate::error::{Error, Result};
+use crate::error::{number, Error, Result};
 use crate::points::shear::{ShearMode, MAX_SHEAR};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -236,7 +236,8 @@ impl CompareConfig {
         }
         if let Some(e) = first_repeat(&self.oracle_errors) {
             return Err(Error::Usage(format!(
-                "oracle_errors lists {e} twice; give each error once"
+                "oracle_errors lists {} twice; give each error once",
+                number(*e)
             )));
         }
         if self.analytic.is_empty() && self.pixel_classes.is_empty() {
@@ -295,7 +296,9 @@ impl CompareConfig {
                 if pair.iter().any(|s| !s.is_finite() || s.abs() > MAX_SHEAR) {
                     return Err(Error::Usage(format!(
                         "{}: {key} = [{}, {}]: shears must be finite and at most {MAX_SHEAR:e} in magnitude (a larger one loses precision in the transported shear), e.g. {key} = [0.5, 0.5]",
-                        e.label, pair[0], pair[1]
+                        e.label,
+                        number(pair[0]),
+                        number(pair[1])
                     )));
                 }
             }
@@ -306,14 +309,18 @@ impl CompareConfig {
                 .find(|&&err| largest * (1.0 + err) > MAX_SHEAR)
             {
                 return Err(Error::Usage(format!(
-                    "{}: shear {largest} with the oracle error {err} is above the largest shear, {MAX_SHEAR:e}; lower oracle_errors or the shear",
-                    e.label
+                    "{}: shear {} with the oracle error {} is above the largest shear, {MAX_SHEAR:e}; lower oracle_errors or the shear",
+                    e.label,
+                    number(largest),
+                    number(*err)
                 )));
             }
             if e.shear_range[0] > e.shear_range[1] {
                 return Err(Error::Usage(format!(
                     "{}: shear_range [{}, {}] has s_min > s_max",
-                    e.label, e.shear_range[0], e.shear_range[1]
+                    e.label,
+                    number(e.shear_range[0]),
+                    number(e.shear_range[1])
                 )));
             }
             let integrand = crate::integrands::parse(&e.spec)
@@ -384,7 +391,7 @@ impl CompareConfig {
         {
             return Err(Error::Usage(format!(
                 "table_seconds = {} is not a time limit; give a finite number of seconds above 0 and at most {MAX_TABLE_SECONDS:e}, e.g. table_seconds = 600",
-                self.table_seconds
+                number(self.table_seconds)
             )));
         }
         if self.tables.is_empty() {
@@ -573,6 +580,25 @@ mod tests {
     #[test]
     fn an_empty_file_is_the_default_suite() {
         assert_eq!(load_text("").unwrap(), CompareConfig::default_suite());
+    }
+
+    #[test]
+    fn numbers_in_messages_are_compact() {
+        let refused = |mend: fn(&mut CompareConfig)| {
+            let mut study = CompareConfig::default_suite();
+            mend(&mut study);
+            let e = study.validate().unwrap_err();
+            assert_eq!(e.exit_code(), 2, "{e}");
+            e.to_string()
+        };
+        let m = refused(|c| c.analytic[0].shear = [1e300, 0.5]);
+        assert!(m.contains("shear = [1e300, 0.5]: shears must be finite"), "{m}");
+        let m = refused(|c| c.analytic[0].shear_range = [0.7, 1e-300]);
+        assert!(m.contains("shear_range [0.7, 1e-300] has s_min > s_max"), "{m}");
+        let m = refused(|c| c.table_seconds = 1e300);
+        assert!(m.contains("table_seconds = 1e300 is not a time limit"), "{m}");
+        let m = refused(|c| c.oracle_errors = vec![1e-300, 1e-300]);
+        assert!(m.contains("oracle_errors lists 1e-300 twice"), "{m}");
     }
 
     #[test]

@@ -592,11 +592,20 @@ mod tests {
             e.to_string()
         };
         let m = refused(|c| c.analytic[0].shear = [1e300, 0.5]);
-        assert!(m.contains("shear = [1e300, 0.5]: shears must be finite"), "{m}");
+        assert!(
+            m.contains("shear = [1e300, 0.5]: shears must be finite"),
+            "{m}"
+        );
         let m = refused(|c| c.analytic[0].shear_range = [0.7, 1e-300]);
-        assert!(m.contains("shear_range [0.7, 1e-300] has s_min > s_max"), "{m}");
+        assert!(
+            m.contains("shear_range [0.7, 1e-300] has s_min > s_max"),
+            "{m}"
+        );
         let m = refused(|c| c.table_seconds = 1e300);
-        assert!(m.contains("table_seconds = 1e300 is not a time limit"), "{m}");
+        assert!(
+            m.contains("table_seconds = 1e300 is not a time limit"),
+            "{m}"
+        );
         let m = refused(|c| c.oracle_errors = vec![1e-300, 1e-300]);
         assert!(m.contains("oracle_errors lists 1e-300 twice"), "{m}");
     }

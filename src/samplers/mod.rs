@@ -412,6 +412,9 @@ mod tests {
         // 1 (two counts away) before usize::MAX − 5.
         let top = |c| c == 1 || c == usize::MAX - 5;
         assert_eq!(nearest_valid(usize::MAX, top), usize::MAX - 5);
-        assert_eq!(nearest_valid(usize::MAX - 1, |c| c == usize::MAX), usize::MAX);
+        assert_eq!(
+            nearest_valid(usize::MAX - 1, |c| c == usize::MAX),
+            usize::MAX
+        );
     }
 }

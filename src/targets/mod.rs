@@ -812,7 +812,10 @@ mod tests {
             "{m}"
         );
         let e = Target::parse("kind = \"blue-noise\"\nradius = 0.5\ndark_weight = 1e300\n");
-        assert!(e.unwrap_err().to_string().contains("'dark_weight' is 1e300;"));
+        assert!(e
+            .unwrap_err()
+            .to_string()
+            .contains("'dark_weight' is 1e300;"));
     }
 
     #[test]

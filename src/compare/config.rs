@@ -195,7 +195,7 @@ impl CompareConfig {
         // Before any sampler looks for its nearest valid N: that search steps one count at a time.
         for &n in &self.ns {
             crate::points::coordinate_count(1, n, 4)
-                .map_err(|e| Error::Usage(format!("ns asks for N = {n}: {e}")))?;
+                .map_err(|e| Error::Usage(format!("ns: {e}")))?;
         }
         if self.realizations < 2 {
             return Err(Error::Usage(

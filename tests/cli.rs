@@ -923,12 +923,12 @@ fn compare_rejects_bad_numbers_and_clashing_names_before_any_work() {
         (|c| c.table_seconds = f64::NAN, "table_seconds = NaN"),
         (
             |c| {
-                c.ns = vec![16, 1_000_000_000];
+                c.ns = vec![16, 1_000_000];
                 c.classical = vec!["sobol".into()];
                 c.sheared = vec!["sobol".into()];
                 c.tables.clear();
             },
-            "no sampler of the study makes N = 1000000000",
+            "no sampler of the study makes N = 1000000",
         ),
         (|c| c.table_seconds = 1e20, "at most 1e6"),
         (|c| c.table_seconds = -1.0, "table_seconds = -1"),
@@ -2423,4 +2423,27 @@ fn variance_of_a_wide_fan_finishes_finite() {
     let row = text.lines().nth(1).unwrap();
     let variance: f64 = row.split(',').nth(1).unwrap().parse().unwrap();
     assert!(variance.is_finite() && variance > 0.0, "{row}");
+}
+
+/// An N of `ns` near `usize::MAX` is refused by the coordinate limit before any sampler looks for its
+/// nearest valid N (a search one count at a time that used to spin for many minutes, and wrap).
+#[test]
+fn compare_refuses_an_n_near_usize_max_before_searching() {
+    let (dir, config) = tmp("study.toml");
+    let out = dir.path().join("report");
+    let (c, o) = (config.to_str().unwrap(), out.to_str().unwrap());
+    for ns in ["[16, 18446744073709551615]", "[18446744073709551615, 16]"] {
+        std::fs::write(&config, format!("ns = {ns}\n")).unwrap();
+        rejects(
+            &["compare", "--config", c, "--out", o],
+            "ns: N × sets × D = 18446744073709551615 × 1 × 4",
+            &out,
+        );
+    }
+    std::fs::write(&config, "spectra_n = 18446744073709551615\n").unwrap();
+    rejects(
+        &["compare", "--config", c, "--out", o],
+        "spectra_n = 18446744073709551615: N × sets × D",
+        &out,
+    );
 }

@@ -2,7 +2,7 @@
 //! (a small default and a paper-scale `--full`) or a strict TOML file, in which every key is optional
 //! (a key left out takes the default suite's value) and an unknown key is refused.
 
-use crate::error::{Error, Result};
+use crate::error::{number, Error, Result};
 use crate::points::shear::{ShearMode, MAX_SHEAR};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -192,6 +192,11 @@ impl CompareConfig {
                 "ns needs at least two positive sizes for a slope, e.g. ns = [16, 64, 256]".into(),
             ));
         }
+        // Before any sampler looks for its nearest valid N: that search steps one count at a time.
+        for &n in &self.ns {
+            crate::points::coordinate_count(1, n, 4)
+                .map_err(|e| Error::Usage(format!("ns: {e}")))?;
+        }
         if self.realizations < 2 {
             return Err(Error::Usage(
                 "realizations must be at least 2 for a standard error".into(),
@@ -231,7 +236,8 @@ impl CompareConfig {
         }
         if let Some(e) = first_repeat(&self.oracle_errors) {
             return Err(Error::Usage(format!(
-                "oracle_errors lists {e} twice; give each error once"
+                "oracle_errors lists {} twice; give each error once",
+                number(*e)
             )));
         }
         if self.analytic.is_empty() && self.pixel_classes.is_empty() {
@@ -257,23 +263,22 @@ impl CompareConfig {
                 "classical is empty, but every gain in the report is against the best classical sampler; list at least one, e.g. classical = [\"padded-jittered\"]".into(),
             ));
         }
-        for name in self.classical.iter().chain(&self.sheared) {
-            let sampler = crate::samplers::build(name, 4)?;
-            for &n in &self.ns {
-                let n = crate::samplers::usable_n(sampler.as_ref(), n);
-                crate::samplers::validate_n(sampler.as_ref(), n)
-                    .map_err(|e| Error::Usage(format!("ns: {e}")))?;
+        for (key, list) in [("classical", &self.classical), ("sheared", &self.sheared)] {
+            let built = list
+                .iter()
+                .map(|name| crate::samplers::build(name, 4))
+                .collect::<Result<Vec<_>>>()?;
+            distinct_samplers(key, list, &built)?;
+            for sampler in &built {
+                for &n in &self.ns {
+                    let n = crate::samplers::usable_n(sampler.as_ref(), n);
+                    crate::samplers::validate_n(sampler.as_ref(), n)
+                        .map_err(|e| Error::Usage(format!("ns: {e}")))?;
+                }
             }
         }
         if self.tables.is_empty() {
             self.validate_ns_made()?;
-        }
-        for (key, list) in [("classical", &self.classical), ("sheared", &self.sheared)] {
-            if let Some(name) = first_repeat(list) {
-                return Err(Error::Usage(format!(
-                    "{key} lists '{name}' twice; give each sampler once"
-                )));
-            }
         }
         if let Some(mode) = first_repeat(&self.shear_modes) {
             return Err(Error::Usage(format!(
@@ -291,7 +296,9 @@ impl CompareConfig {
                 if pair.iter().any(|s| !s.is_finite() || s.abs() > MAX_SHEAR) {
                     return Err(Error::Usage(format!(
                         "{}: {key} = [{}, {}]: shears must be finite and at most {MAX_SHEAR:e} in magnitude (a larger one loses precision in the transported shear), e.g. {key} = [0.5, 0.5]",
-                        e.label, pair[0], pair[1]
+                        e.label,
+                        number(pair[0]),
+                        number(pair[1])
                     )));
                 }
             }
@@ -302,14 +309,18 @@ impl CompareConfig {
                 .find(|&&err| largest * (1.0 + err) > MAX_SHEAR)
             {
                 return Err(Error::Usage(format!(
-                    "{}: shear {largest} with the oracle error {err} is above the largest shear, {MAX_SHEAR:e}; lower oracle_errors or the shear",
-                    e.label
+                    "{}: shear {} with the oracle error {} is above the largest shear, {MAX_SHEAR:e}; lower oracle_errors or the shear",
+                    e.label,
+                    number(largest),
+                    number(*err)
                 )));
             }
             if e.shear_range[0] > e.shear_range[1] {
                 return Err(Error::Usage(format!(
                     "{}: shear_range [{}, {}] has s_min > s_max",
-                    e.label, e.shear_range[0], e.shear_range[1]
+                    e.label,
+                    number(e.shear_range[0]),
+                    number(e.shear_range[1])
                 )));
             }
             let integrand = crate::integrands::parse(&e.spec)
@@ -380,7 +391,7 @@ impl CompareConfig {
         {
             return Err(Error::Usage(format!(
                 "table_seconds = {} is not a time limit; give a finite number of seconds above 0 and at most {MAX_TABLE_SECONDS:e}, e.g. table_seconds = 600",
-                self.table_seconds
+                number(self.table_seconds)
             )));
         }
         if self.tables.is_empty() {
@@ -472,6 +483,8 @@ impl CompareConfig {
                 "spectra_n = 0 asks for no points; give at least 1, e.g. spectra_n = 256".into(),
             ));
         }
+        crate::points::coordinate_count(1, self.spectra_n, 4)
+            .map_err(|e| Error::Usage(format!("spectra_n = {}: {e}", self.spectra_n)))?;
         crate::spectrum::check_res_named("spectra_res =", self.spectra_res)?;
         if self.spectra_realizations == 0 {
             return Err(Error::Usage(
@@ -481,6 +494,30 @@ impl CompareConfig {
         crate::stats::check_realizations("spectra_realizations =", self.spectra_realizations)?;
         Ok(())
     }
+}
+
+/// Refuses a sampler that `key` (`classical` or `sheared`) lists twice, under one name or two
+/// spellings of it (`lattice:1:3:5:7` and `lattice:01:3:5:7`): it would be run twice and reported as
+/// two identical rows. `built` holds the samplers built from `names`, in order.
+fn distinct_samplers(
+    key: &str,
+    names: &[String],
+    built: &[Box<dyn crate::samplers::Sampler>],
+) -> Result<()> {
+    for (j, b) in built.iter().enumerate() {
+        if let Some(i) = built[..j].iter().position(|a| a.name() == b.name()) {
+            let (first, again) = (names[i].trim(), names[j].trim());
+            let which = if first == again {
+                format!("'{first}' twice")
+            } else {
+                format!("'{first}' and '{again}', both the sampler {}", b.name())
+            };
+            return Err(Error::Usage(format!(
+                "{key} lists {which}; give each sampler once, e.g. {key} = [\"{first}\"]"
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The first item of `list` that appears in it again.
@@ -543,6 +580,68 @@ mod tests {
     #[test]
     fn an_empty_file_is_the_default_suite() {
         assert_eq!(load_text("").unwrap(), CompareConfig::default_suite());
+    }
+
+    #[test]
+    fn numbers_in_messages_are_compact() {
+        let refused = |mend: fn(&mut CompareConfig)| {
+            let mut study = CompareConfig::default_suite();
+            mend(&mut study);
+            let e = study.validate().unwrap_err();
+            assert_eq!(e.exit_code(), 2, "{e}");
+            e.to_string()
+        };
+        let m = refused(|c| c.analytic[0].shear = [1e300, 0.5]);
+        assert!(
+            m.contains("shear = [1e300, 0.5]: shears must be finite"),
+            "{m}"
+        );
+        let m = refused(|c| c.analytic[0].shear_range = [0.7, 1e-300]);
+        assert!(
+            m.contains("shear_range [0.7, 1e-300] has s_min > s_max"),
+            "{m}"
+        );
+        let m = refused(|c| c.table_seconds = 1e300);
+        assert!(
+            m.contains("table_seconds = 1e300 is not a time limit"),
+            "{m}"
+        );
+        let m = refused(|c| c.oracle_errors = vec![1e-300, 1e-300]);
+        assert!(m.contains("oracle_errors lists 1e-300 twice"), "{m}");
+    }
+
+    #[test]
+    fn a_sampler_listed_twice_is_refused_naming_it() {
+        let twice = |key: &str, list: &[&str]| {
+            let list: Vec<String> = list.iter().map(|s| s.to_string()).collect();
+            let mut study = CompareConfig::default_suite();
+            if key == "classical" {
+                study.classical = list;
+            } else {
+                study.sheared = list;
+            }
+            let e = study.validate().unwrap_err();
+            assert_eq!(e.exit_code(), 2, "{e}");
+            e.to_string()
+        };
+        let m = twice("classical", &["lattice:1:3:5:7", "lattice:01:3:5:7"]);
+        assert!(
+            m.contains("classical lists 'lattice:1:3:5:7' and 'lattice:01:3:5:7'")
+                && m.contains("give each sampler once"),
+            "{m}"
+        );
+        let m = twice("sheared", &["sobol", "padded-mj", "sobol"]);
+        assert!(
+            m.contains("sheared lists 'sobol' twice; give each sampler once"),
+            "{m}"
+        );
+        // One sampler both classical and sheared is two different rows, and allowed.
+        let study = CompareConfig {
+            classical: vec!["sobol".into()],
+            sheared: vec!["sobol".into()],
+            ..CompareConfig::default_suite()
+        };
+        assert!(study.validate().is_ok());
     }
 
     #[cfg(unix)]

@@ -124,7 +124,9 @@ impl Integrand for Gaussian {
     fn name(&self) -> String {
         format!(
             "gaussian:sigma={},cx={},cy={}",
-            self.sigma, self.centre[0], self.centre[1]
+            number(self.sigma),
+            number(self.centre[0]),
+            number(self.centre[1])
         )
     }
     fn dims(&self) -> usize {
@@ -185,7 +187,8 @@ impl Disc {
                 return Err(Error::Usage(format!(
                     "disc: {key}={} with r={r} puts the disc outside the domain [0,1]²; keep {r} <= {key} <= {}",
                     number(c),
-                    1.0 - r
+                    number(1.0 - r),
+                    r = number(r)
                 )));
             }
         }
@@ -197,7 +200,9 @@ impl Integrand for Disc {
     fn name(&self) -> String {
         format!(
             "disc:r={},cx={},cy={}",
-            self.r, self.centre[0], self.centre[1]
+            number(self.r),
+            number(self.centre[0]),
+            number(self.centre[1])
         )
     }
     fn dims(&self) -> usize {
@@ -300,8 +305,10 @@ impl HalfPlane {
         };
         if c <= lo || c >= hi {
             return Err(Error::Usage(format!(
-                "{family}: the edge at c={} misses the unit square (it crosses it for {lo:.4} < c < {hi:.4}); choose c in that range",
-                number(c)
+                "{family}: the edge at c={} misses the unit square (it crosses it for {} < c < {}); choose c in that range",
+                number(c),
+                number(lo),
+                number(hi)
             )));
         }
         Ok(Self {
@@ -404,8 +411,10 @@ impl Fan {
         let (lo, hi) = (s0.min(0.0), 1.0 + s1.max(0.0));
         if c <= lo || c >= hi {
             return Err(Error::Usage(format!(
-                "fan: the edges at c={} miss the unit square (they cross it for {lo:.4} < c < {hi:.4}); choose c in that range",
-                number(c)
+                "fan: the edges at c={} miss the unit square (they cross it for {} < c < {}); choose c in that range",
+                number(c),
+                number(lo),
+                number(hi)
             )));
         }
         let mut fan = Self {
@@ -577,6 +586,22 @@ impl Integrand for Fan {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn names_and_messages_echo_numbers_compactly() {
+        let g = Gaussian::new(1e-300, [1e-300, 0.25]).unwrap();
+        assert_eq!(g.name(), "gaussian:sigma=1e-300,cx=1e-300,cy=0.25");
+        let d = Disc::new(1e-300, [0.5, 1e-300]).unwrap();
+        assert_eq!(d.name(), "disc:r=1e-300,cx=0.5,cy=1e-300");
+        let e = Disc::new(1e-300, [0.5, 0.0]).unwrap_err().to_string();
+        assert!(e.contains("keep 1e-300 <= cy <= 1"), "{e}");
+        for (s, range) in [(-1e-5, "-1e-5 < c < 1"), (123456.789, "0 < c < 123457.789")] {
+            let e = HalfPlane::sheared(s, Some(-5.0)).unwrap_err().to_string();
+            assert!(e.contains(range), "{e}");
+        }
+        let e = Fan::new(-1e-5, 0.5, Some(5.0)).unwrap_err().to_string();
+        assert!(e.contains("-1e-5 < c < 1.5"), "{e}");
+    }
 
     /// Midpoint rule over an `m × m` grid.
     fn grid_integral(f: &dyn Integrand, m: usize, g: impl Fn(f64) -> f64) -> f64 {

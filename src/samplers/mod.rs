@@ -99,11 +99,15 @@ pub fn generate_sets(sampler: &dyn Sampler, n: usize, sets: usize, seed: u64) ->
 }
 
 /// The valid count nearest to `n` (at least 1) according to `valid`; ties go to the smaller count.
+///
+/// The search steps outwards one count at a time, so callers keep `n` under the coordinate limit
+/// ([`crate::points::coordinate_count`]) first; it never steps past `usize::MAX`. Every caller's
+/// `valid` accepts some count in `[1, usize::MAX]` (each sampler makes at least one size).
 pub(crate) fn nearest_valid(n: usize, valid: impl Fn(usize) -> bool) -> usize {
-    (0..)
+    (0..=usize::MAX)
         .find_map(|d| {
             let below = n.checked_sub(d).filter(|&c| c >= 1 && valid(c));
-            below.or_else(|| Some(n + d).filter(|&c| valid(c)))
+            below.or_else(|| n.checked_add(d).filter(|&c| valid(c)))
         })
         .expect("some count is valid")
 }
@@ -404,5 +408,13 @@ mod tests {
         assert_eq!(nearest_valid(50, |c| c == 49 || c == 51), 49);
         assert_eq!(nearest_valid(3, |c| c == 1 || c == 5), 1);
         assert_eq!(nearest_valid(1, |c| c == 9), 9);
+        // Near the top of usize the upward search stops at usize::MAX: a wrapped step would reach
+        // 1 (two counts away) before usize::MAX − 5.
+        let top = |c| c == 1 || c == usize::MAX - 5;
+        assert_eq!(nearest_valid(usize::MAX, top), usize::MAX - 5);
+        assert_eq!(
+            nearest_valid(usize::MAX - 1, |c| c == usize::MAX),
+            usize::MAX
+        );
     }
 }

@@ -215,16 +215,24 @@ fn finite(name: &str, v: f64) -> Result<()> {
         Ok(())
     } else {
         Err(Error::Input(format!(
-            "target parameter '{name}' is {v}; every parameter must be a finite number"
+            "target parameter '{name}' is {}; every parameter must be a finite number",
+            number(v)
         )))
     }
 }
 
-fn non_negative(name: &str, v: f64) -> Result<()> {
+/// The largest width, length or radius of a shape target, in units of `sqrt(N)`: a target reaching
+/// farther needs a grid wider than [`crate::spectrum::MAX_RES`] even at the smallest N, 2 (its fit
+/// radius is twice its reach, `2 · 1024 · sqrt(2) > 8192 / 2` cells); a width beyond it is wider than
+/// any grid. The shipped targets stay below 2.
+pub const MAX_SIZE: f64 = 1024.0;
+
+/// A width, length or radius `v` of key `name`: finite, in `[0, MAX_SIZE]`.
+fn size(name: &str, v: f64) -> Result<()> {
     finite(name, v)?;
-    if v < 0.0 {
+    if !(0.0..=MAX_SIZE).contains(&v) {
         return Err(Error::Input(format!(
-            "target parameter '{name}' is {}; it is a width or radius and must be >= 0",
+            "target parameter '{name}' is {}; it is a width or radius in units of sqrt(N) and must lie in [0, {MAX_SIZE}] (the shipped targets stay at or below 2)",
             number(v)
         )));
     }
@@ -236,7 +244,8 @@ fn non_negative(name: &str, v: f64) -> Result<()> {
 fn max_shear(name: &str, v: f64) -> Result<()> {
     if v.abs() > MAX_SHEAR {
         return Err(Error::Input(format!(
-            "target parameter '{name}' is {v:?}; give a finite shear of magnitude at most {MAX_SHEAR:e}"
+            "target parameter '{name}' is {}; give a finite shear of magnitude at most {MAX_SHEAR:e}",
+            number(v)
         )));
     }
     Ok(())
@@ -247,7 +256,8 @@ fn dark_weight(w: Option<f64>) -> Result<f64> {
     finite("dark_weight", w)?;
     if !(w > 0.0 && w <= MAX_DARK_WEIGHT) {
         return Err(Error::Input(format!(
-            "target parameter 'dark_weight' is {w:?}; give a number > 0 and at most {MAX_DARK_WEIGHT:e} (larger weights overflow the solver's line search)"
+            "target parameter 'dark_weight' is {}; give a number > 0 and at most {MAX_DARK_WEIGHT:e} (larger weights overflow the solver's line search)",
+            number(w)
         )));
     }
     Ok(w)
@@ -305,10 +315,10 @@ impl Target {
             Target::Hairline(h) => {
                 finite("shear", h.shear)?;
                 max_shear("shear", h.shear)?;
-                non_negative("half_width", h.half_width)?;
-                non_negative("opening", h.opening)?;
-                non_negative("length", h.length)?;
-                non_negative("inner_radius", h.inner_radius)?;
+                size("half_width", h.half_width)?;
+                size("opening", h.opening)?;
+                size("length", h.length)?;
+                size("inner_radius", h.inner_radius)?;
                 dark_weight(h.dark_weight)?;
                 falloff(h.falloff)?;
             }
@@ -331,19 +341,19 @@ impl Target {
                 }
                 max_shear("s0", d.s0)?;
                 max_shear("s1", d.s1)?;
-                non_negative("radius", d.radius)?;
-                non_negative("margin", d.margin)?;
-                non_negative("inner_radius", d.inner_radius)?;
+                size("radius", d.radius)?;
+                size("margin", d.margin)?;
+                size("inner_radius", d.inner_radius)?;
                 dark_weight(d.dark_weight)?;
                 falloff(d.falloff)?;
             }
             Target::BlueNoise(b) => {
-                non_negative("radius", b.radius)?;
+                size("radius", b.radius)?;
                 dark_weight(b.dark_weight)?;
                 falloff(b.falloff)?;
             }
             Target::Image(i) => {
-                non_negative("extent", i.extent)?;
+                size("extent", i.extent)?;
                 if i.extent == 0.0 {
                     return Err(Error::Input(
                         "target parameter 'extent' is 0; the image must cover a positive range of normalized frequency".into(),
@@ -662,10 +672,20 @@ impl Target {
     fn beyond_reach(&self, n: usize, dark_cells: f64) -> Error {
         let reach = REACH * n as f64;
         Error::Input(format!(
-            "the {} target darkens {dark_cells:.0} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}: reachable fraction {:.3}. Shrink its dark region (radius, length or half-width) by that factor in area",
+            "the {} target darkens {} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}: reachable fraction {}. Shrink its dark region (radius, length or half-width) by that factor in area",
             self.kind(),
-            reach / dark_cells
+            number(dark_cells.round()),
+            significant(reach / dark_cells)
         ))
+    }
+}
+
+/// `v` to three significant digits, in scientific form below 0.001 (where three decimals would read 0).
+fn significant(v: f64) -> String {
+    if v < 1e-3 {
+        format!("{v:.2e}")
+    } else {
+        format!("{v:.3}")
     }
 }
 
@@ -764,6 +784,38 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("half_width"));
+    }
+
+    #[test]
+    fn huge_sizes_are_refused_by_key_and_echoed_compactly() {
+        let hairline = "kind = \"hairline\"\nshear = 0.5\n";
+        for (key, value, rest) in [
+            ("half_width", "1e300", "length = 1"),
+            ("inner_radius", "1e300", "half_width = 0.1\nlength = 1"),
+            ("length", "1025", "half_width = 0.1"),
+        ] {
+            let text = format!("{hairline}{key} = {value}\n{rest}\n");
+            let e = Target::parse(&text).unwrap_err();
+            assert!(matches!(e, Error::Input(_)), "{key}: {e}");
+            let m = e.to_string();
+            assert!(
+                m.contains(&format!("'{key}' is {value};")) && m.contains("[0, 1024]"),
+                "{key}: {m}"
+            );
+        }
+        // The largest size allowed still gets advice that reads: a finite count and a fraction that
+        // is not rounded to 0.
+        let wide = Target::parse("kind = \"blue-noise\"\nradius = 1024\n").unwrap();
+        let m = wide.grid(2).unwrap_err().to_string();
+        assert!(
+            m.contains("darkens 6588397 frequency cells") && m.contains("fraction 3.04e-7."),
+            "{m}"
+        );
+        let e = Target::parse("kind = \"blue-noise\"\nradius = 0.5\ndark_weight = 1e300\n");
+        assert!(e
+            .unwrap_err()
+            .to_string()
+            .contains("'dark_weight' is 1e300;"));
     }
 
     #[test]

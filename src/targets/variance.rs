@@ -113,13 +113,13 @@ impl Variance {
         if !(self.shear.is_finite() && self.shear.abs() <= MAX_SHEAR) {
             return Err(Error::Input(format!(
                 "target parameter 'shear' is {}; give a finite shear of magnitude at most {MAX_SHEAR:e}",
-                self.shear
+                crate::error::number(self.shear)
             )));
         }
         if !(self.extent.is_finite() && self.extent > 0.0) {
             return Err(Error::Input(format!(
                 "target parameter 'extent' is {}; it is the fit radius in units of sqrt(N) and must be a finite number > 0",
-                self.extent
+                crate::error::number(self.extent)
             )));
         }
         if self.placements() > MAX_PLACEMENTS {
@@ -131,7 +131,8 @@ impl Variance {
         let w = self.weight();
         if !(w.is_finite() && w > 0.0 && w <= MAX_VARIANCE_WEIGHT) {
             return Err(Error::Input(format!(
-                "target parameter 'weight' is {w}; give a number > 0 and at most {MAX_VARIANCE_WEIGHT:e} (larger weights overflow the solver's line search)"
+                "target parameter 'weight' is {}; give a number > 0 and at most {MAX_VARIANCE_WEIGHT:e} (larger weights overflow the solver's line search)",
+                crate::error::number(w)
             )));
         }
         Ok(())

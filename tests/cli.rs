@@ -267,10 +267,16 @@ fn extreme_values_are_refused() {
     let long = dir.path().join("long.toml");
     std::fs::write(
         &long,
+        "kind = \"hairline\"\nshear = 0.0\nhalf_width = 0.0\nlength = 1024\ninner_radius = 0.0\n",
+    )
+    .unwrap();
+    let huge = dir.path().join("huge.toml");
+    std::fs::write(
+        &huge,
         "kind = \"hairline\"\nshear = 0.0\nhalf_width = 0.0\nlength = 1e300\ninner_radius = 0.0\n",
     )
     .unwrap();
-    let cases: [(Vec<&str>, &str); 6] = [
+    let cases: [(Vec<&str>, &str); 7] = [
         (
             vec![
                 "spectrum",
@@ -352,6 +358,18 @@ fn extreme_values_are_refused() {
                 o,
             ],
             "beyond the largest grid",
+        ),
+        (
+            vec![
+                "optimize",
+                "--target",
+                huge.to_str().unwrap(),
+                "-n",
+                "16",
+                "-o",
+                o,
+            ],
+            "'length' is 1e300; it is a width or radius in units of sqrt(N) and must lie in [0, 1024]",
         ),
     ];
     for (args, needle) in &cases {

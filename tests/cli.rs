@@ -2465,3 +2465,24 @@ fn compare_refuses_an_n_near_usize_max_before_searching() {
         &out,
     );
 }
+
+/// A negative count for a flag other than `-n` is answered by that flag, not taken for an unknown
+/// flag: exit 2, the flag named, and no output.
+#[test]
+fn negative_counts_are_named_by_their_flag() {
+    let (_dir, out) = tmp("s.png");
+    let o = out.to_str().unwrap();
+    for (flag, extra) in [
+        ("--res", vec!["spectrum", "--sampler", "random", "-n", "16"]),
+        (
+            "--realizations",
+            vec!["spectrum", "--sampler", "random", "-n", "16"],
+        ),
+        ("--sets", vec!["sample", "--sampler", "random", "-n", "16"]),
+    ] {
+        let mut args = extra.clone();
+        args.extend([flag, "-2", "-o", o]);
+        rejects(&args, &format!("'{flag} <"), &out);
+        rejects(&args, "a count cannot be negative", &out);
+    }
+}

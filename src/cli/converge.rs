@@ -29,7 +29,7 @@ pub struct ConvergeArgs {
     pub n: Vec<usize>,
     /// Realizations per N (R): each an independent set with its own random toroidal shift; 2 to
     /// 1000000.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub realizations: usize,
     /// Random seed: the same seed gives the same numbers whatever the thread count.
     #[arg(long, default_value_t = 1)]

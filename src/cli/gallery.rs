@@ -54,10 +54,10 @@ pub struct GalleryArgs {
     )]
     pub n: usize,
     /// Frequency grid side K (even).
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub res: usize,
     /// Realizations averaged per spectrum (at most 1000000).
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub realizations: usize,
     /// NUFFT tolerance.
     #[arg(long, default_value_t = 1e-6)]

@@ -77,6 +77,20 @@ pub fn parse_count(text: &str) -> std::result::Result<usize, String> {
     }
 }
 
+/// Parses a count flag other than N (`--res`, `--realizations`, `--sets`, `--cones`, `--average`): a
+/// whole number, 0 or more (each command then checks its own range). Negative numbers reach this
+/// parser (the flags allow them) so that `--res -2` is answered here rather than as an unknown flag.
+pub fn parse_whole(text: &str) -> std::result::Result<usize, String> {
+    match text.trim().parse::<i128>() {
+        Ok(v) if v >= 0 => usize::try_from(v)
+            .map_err(|_| format!("{text} is above the largest count, {}", usize::MAX)),
+        Ok(_) => Err(format!(
+            "a count cannot be negative; give a whole number, not {text}"
+        )),
+        Err(_) => Err(format!("'{text}' is not a whole number; give one, e.g. 64")),
+    }
+}
+
 /// Checks that a list of N (`-n 16,64,256`) names each N once: a repeat would measure the same thing
 /// twice and print it as two rows.
 pub fn distinct_counts(ns: &[usize]) -> Result<()> {

@@ -34,7 +34,7 @@ pub struct OptimizeArgs {
     #[arg(short = 'n', long, value_parser = super::parse_count, allow_negative_numbers = true)]
     pub n: usize,
     /// Number of sets; they are optimized in parallel, set s from random stream s of the seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub sets: usize,
     /// Seed of the random starts (default 1, as in every other command).
     #[arg(long, default_value_t = 1)]

@@ -37,11 +37,11 @@ pub struct PixelSpectrumArgs {
     /// Frequency grid size K (even): the integrand is sampled on a K x K grid of cell centres and
     /// k1, k2 run over -K/2..K/2-1. K² · M² (with M of --average) is at most 1073741824 ray casts
     /// (2^30, e.g. K = 128 with M = 256, or K = 1024 with M = 32).
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub res: usize,
     /// The other two coordinates are averaged with an M x M midpoint grid; 1 fixes them to 1/2. At
     /// most 256, and K² · M² ray casts in all at most 1073741824 (2^30).
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 8, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub average: usize,
     /// Output path; FILE.npy (float64 [K, K], P[i, j] at k1 = j - K/2, k2 = i - K/2), FILE.exr (raw
     /// values, largest k2 on top) and FILE.png (log10 of P over its largest non-DC value, from -6 to 0)

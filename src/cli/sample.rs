@@ -22,7 +22,7 @@ pub struct SampleArgs {
     #[arg(short = 'n', long = "n", value_parser = super::parse_count, allow_negative_numbers = true)]
     pub n: usize,
     /// Number of independent sets to draw.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub sets: usize,
     /// Random seed; set s uses stream s of this seed, so the same seed gives the same bits on any
     /// number of threads.

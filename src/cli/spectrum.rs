@@ -42,12 +42,12 @@ pub struct SpectrumArgs {
     #[arg(long, default_value = "xy")]
     pub proj: String,
     /// Frequency grid side K (even): k1, k2 run over −K/2 … K/2−1.
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub res: usize,
     /// Realizations averaged (independent sets). With --sampler, default 32; with --input, at most the
     /// number of sets in the file (default: all of them, so a file of more than 1000000 sets needs
     /// this flag). --stderr needs at least 2. At most 1000000.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub realizations: Option<usize>,
     /// Use the exact O(N K²) DFT instead of the NUFFT.
     #[arg(long, conflicts_with = "eps")]
@@ -75,7 +75,7 @@ pub struct SpectrumArgs {
     pub radial: Option<PathBuf>,
     /// Number of directional cones in the radial CSV (cone c is centred on angle c·180°/M; cone 0 holds
     /// the k1 axis); at most 360.
-    #[arg(long, default_value_t = 0, requires = "radial")]
+    #[arg(long, default_value_t = 0, requires = "radial", value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub cones: usize,
 }
 

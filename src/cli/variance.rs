@@ -39,17 +39,17 @@ pub struct VarianceArgs {
     pub n: Vec<usize>,
     /// Frequency grid side K (even) in each projection; the rest of the sum is estimated as white noise
     /// (Parseval) and reported as the tail.
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub res: usize,
     /// Grow the grid with N: K = max(--res, M·N). Discontinuous integrands under stratified samplers
     /// need K of a few N for an accurate sum; cheap for edges aligned with an axis.
     #[arg(long, value_name = "M")]
     pub res_per_n: Option<usize>,
     /// Realizations of the sampler averaged for E[P_N(k)]; 2 to 1000000.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub realizations: usize,
     /// Number of directional cones (cone c centred on c·180°/M; cone 0 holds the k1 axis); 1 to 360.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub cones: usize,
     /// Use the exact DFT for full-grid spectra instead of the NUFFT.
     #[arg(long, conflicts_with = "eps")]

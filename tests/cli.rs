@@ -1982,7 +1982,7 @@ fn converge_refuses_a_sampler_listed_twice() {
         args.extend(&samplers);
         rejects(
             &args,
-            "--sampler lists mj twice; give each sampler once",
+            "--sampler lists 'mj' twice; give each sampler once",
             &csv,
         );
         assert!(
@@ -2483,6 +2483,6 @@ fn negative_counts_are_named_by_their_flag() {
         let mut args = extra.clone();
         args.extend([flag, "-2", "-o", o]);
         rejects(&args, &format!("'{flag} <"), &out);
-        rejects(&args, "a count cannot be negative", &out);
+        rejects(&args, "a count is a whole number, 0 or more, not -2", &out);
     }
 }

@@ -3,7 +3,6 @@
 use crate::converge::{converge, plot, write_csv, ConvergeConfig, Convergence};
 use crate::error::{Error, Result};
 use crate::integrands::parse;
-use crate::samplers::Sampler;
 use std::path::PathBuf;
 
 /// Measure MSE(N) over independent, randomly shifted realizations, and fit the convergence slope.
@@ -50,25 +49,6 @@ pub struct ConvergeArgs {
     pub plot: Option<PathBuf>,
 }
 
-/// Refuses a sampler given twice (`--sampler mj,mj`, or two spellings of one sampler): it would be
-/// measured twice and printed as two tables, CSV rows and plot lines of one name.
-fn distinct_samplers(names: &[String], built: &[Box<dyn Sampler>]) -> Result<()> {
-    for (j, b) in built.iter().enumerate() {
-        if let Some(i) = built[..j].iter().position(|a| a.name() == b.name()) {
-            let (first, again) = (names[i].trim(), names[j].trim());
-            let which = if first == again {
-                format!("{first} twice")
-            } else {
-                format!("{first} and {again}, both the sampler {}", b.name())
-            };
-            return Err(Error::Usage(format!(
-                "--sampler lists {which}; give each sampler once (e.g. --sampler random,jittered,mj)"
-            )));
-        }
-    }
-    Ok(())
-}
-
 /// Runs every sampler, prints a table per sampler, writes the CSV and the plot.
 pub fn run(args: &ConvergeArgs) -> Result<()> {
     if let Some(csv) = &args.output {
@@ -101,7 +81,11 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             Ok(s)
         })
         .collect::<Result<Vec<_>>>()?;
-    distinct_samplers(&args.sampler, &built)?;
+    if let Some(which) = crate::samplers::repeated(&args.sampler, &built) {
+        return Err(Error::Usage(format!(
+            "--sampler lists {which}; give each sampler once (e.g. --sampler random,jittered,mj)"
+        )));
+    }
     let cfg = ConvergeConfig {
         realizations: args.realizations,
         seed: args.seed,

@@ -62,33 +62,27 @@ pub fn parse_shear(text: &str) -> std::result::Result<(f64, f64), String> {
     }
 }
 
-/// Parses a point count N (`-n`, `--spp`): a positive integer. Negative numbers reach this parser
-/// (the flags allow them) so that `-n -5` is answered here rather than as an unknown flag.
-pub fn parse_count(text: &str) -> std::result::Result<usize, String> {
+/// Parses a whole number of at least `least` (0 or 1), or says what `rule` asks of it. Negative
+/// numbers reach this parser (the flags using it allow them) so that `-n -5` or `--res -2` is answered
+/// here rather than as an unknown flag.
+fn parse_at_least(text: &str, least: i128, rule: &str) -> std::result::Result<usize, String> {
     match text.trim().parse::<i128>() {
-        Ok(v) if v >= 1 => usize::try_from(v)
+        Ok(v) if v >= least => usize::try_from(v)
             .map_err(|_| format!("{text} is above the largest count, {}", usize::MAX)),
-        Ok(_) => Err(format!(
-            "N must be a positive integer (1 or more), not {text}"
-        )),
-        Err(_) => Err(format!(
-            "'{text}' is not a whole number; N must be a positive integer, e.g. 64"
-        )),
+        Ok(_) => Err(format!("{rule}, not {text}")),
+        Err(_) => Err(format!("'{text}' is not a whole number; {rule}, e.g. 64")),
     }
 }
 
+/// Parses a point count N (`-n`, `--spp`): a positive integer.
+pub fn parse_count(text: &str) -> std::result::Result<usize, String> {
+    parse_at_least(text, 1, "N must be a positive integer (1 or more)")
+}
+
 /// Parses a count flag other than N (`--res`, `--realizations`, `--sets`, `--cones`, `--average`): a
-/// whole number, 0 or more (each command then checks its own range). Negative numbers reach this
-/// parser (the flags allow them) so that `--res -2` is answered here rather than as an unknown flag.
+/// whole number, 0 or more (each command then checks its own range).
 pub fn parse_whole(text: &str) -> std::result::Result<usize, String> {
-    match text.trim().parse::<i128>() {
-        Ok(v) if v >= 0 => usize::try_from(v)
-            .map_err(|_| format!("{text} is above the largest count, {}", usize::MAX)),
-        Ok(_) => Err(format!(
-            "a count cannot be negative; give a whole number, not {text}"
-        )),
-        Err(_) => Err(format!("'{text}' is not a whole number; give one, e.g. 64")),
-    }
+    parse_at_least(text, 0, "a count is a whole number, 0 or more")
 }
 
 /// Checks that a list of N (`-n 16,64,256`) names each N once: a repeat would measure the same thing

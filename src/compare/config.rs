@@ -268,7 +268,11 @@ impl CompareConfig {
                 .iter()
                 .map(|name| crate::samplers::build(name, 4))
                 .collect::<Result<Vec<_>>>()?;
-            distinct_samplers(key, list, &built)?;
+            if let Some(which) = crate::samplers::repeated(list, &built) {
+                return Err(Error::Usage(format!(
+                    "{key} lists {which}; give each sampler once"
+                )));
+            }
             for sampler in &built {
                 for &n in &self.ns {
                     let n = crate::samplers::usable_n(sampler.as_ref(), n);
@@ -494,30 +498,6 @@ impl CompareConfig {
         crate::stats::check_realizations("spectra_realizations =", self.spectra_realizations)?;
         Ok(())
     }
-}
-
-/// Refuses a sampler that `key` (`classical` or `sheared`) lists twice, under one name or two
-/// spellings of it (`lattice:1:3:5:7` and `lattice:01:3:5:7`): it would be run twice and reported as
-/// two identical rows. `built` holds the samplers built from `names`, in order.
-fn distinct_samplers(
-    key: &str,
-    names: &[String],
-    built: &[Box<dyn crate::samplers::Sampler>],
-) -> Result<()> {
-    for (j, b) in built.iter().enumerate() {
-        if let Some(i) = built[..j].iter().position(|a| a.name() == b.name()) {
-            let (first, again) = (names[i].trim(), names[j].trim());
-            let which = if first == again {
-                format!("'{first}' twice")
-            } else {
-                format!("'{first}' and '{again}', both the sampler {}", b.name())
-            };
-            return Err(Error::Usage(format!(
-                "{key} lists {which}; give each sampler once, e.g. {key} = [\"{first}\"]"
-            )));
-        }
-    }
-    Ok(())
 }
 
 /// The first item of `list` that appears in it again.

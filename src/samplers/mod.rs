@@ -75,6 +75,22 @@ pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
     sampler.check_parameters(n)
 }
 
+/// The first sampler of `built` that repeats an earlier one (the same built name: one sampler given
+/// twice, or two spellings of it), described from `names`, the names as given, in order:
+/// `'mj' twice`, or `'lattice:1:3' and 'lattice:01:3', both the sampler lattice:1:3`. A list of
+/// samplers to compare names each once: a repeat would be measured twice and reported twice.
+pub fn repeated(names: &[String], built: &[Box<dyn Sampler>]) -> Option<String> {
+    built.iter().enumerate().find_map(|(j, b)| {
+        let i = built[..j].iter().position(|a| a.name() == b.name())?;
+        let (first, again) = (names[i].trim(), names[j].trim());
+        Some(if first == again {
+            format!("'{first}' twice")
+        } else {
+            format!("'{first}' and '{again}', both the sampler {}", b.name())
+        })
+    })
+}
+
 /// `n` if the sampler allows it, else its nearest valid N.
 pub fn usable_n(sampler: &dyn Sampler, n: usize) -> usize {
     sampler.check_n(n).map_or_else(|m| m, |_| n)

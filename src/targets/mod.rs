@@ -675,17 +675,8 @@ impl Target {
             "the {} target darkens {} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}: reachable fraction {}. Shrink its dark region (radius, length or half-width) by that factor in area",
             self.kind(),
             number(dark_cells.round()),
-            significant(reach / dark_cells)
+            crate::output::plot::short_number(reach / dark_cells)
         ))
-    }
-}
-
-/// `v` to three significant digits, in scientific form below 0.001 (where three decimals would read 0).
-fn significant(v: f64) -> String {
-    if v < 1e-3 {
-        format!("{v:.2e}")
-    } else {
-        format!("{v:.3}")
     }
 }
 
@@ -808,7 +799,7 @@ mod tests {
         let wide = Target::parse("kind = \"blue-noise\"\nradius = 1024\n").unwrap();
         let m = wide.grid(2).unwrap_err().to_string();
         assert!(
-            m.contains("darkens 6588397 frequency cells") && m.contains("fraction 3.04e-7."),
+            m.contains("darkens 6588397 frequency cells") && m.contains("fraction 3.036e-7."),
             "{m}"
         );
         let e = Target::parse("kind = \"blue-noise\"\nradius = 0.5\ndark_weight = 1e300\n");

@@ -74,7 +74,7 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
     crate::output::check_folder(&args.out, "--out", "gallery")?;
     let method = Method::nufft(args.eps)?;
     let gallery = args.out.join("gallery");
-    crate::output::check_report_folder(&gallery, GALLERY_MARKER, "--out")?;
+    crate::output::check_report_folder(&gallery, GALLERY_MARKER)?;
     // The whole gallery or nothing: a failure leaves an earlier one as it was.
     write_folder(&gallery, GALLERY_MARKER, |dir| {
         let mut rows = Vec::new();

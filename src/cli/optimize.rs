@@ -4,6 +4,7 @@
 use crate::error::{Error, Result};
 use crate::optimize::{
     self, lattice_design, loss::Repulsion, metrics, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
+    DEFAULT_LIMITS, DEFAULT_REPULSION, DEFAULT_STRATA,
 };
 use crate::output::{check_outputs, write_atomic, write_group};
 use crate::points::io::write_points;
@@ -12,7 +13,7 @@ use crate::samplers;
 use crate::spectrum::Method;
 use crate::targets::variance::Design;
 use crate::targets::Target;
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -45,13 +46,13 @@ pub struct OptimizeArgs {
     #[arg(short = 'o', long)]
     pub output: PathBuf,
     /// Largest number of solver iterations per set.
-    #[arg(long, default_value_t = 2000)]
+    #[arg(long, default_value_t = DEFAULT_LIMITS.max_iters)]
     pub max_iters: u64,
     /// Largest wall time per set, in seconds (results depend on machine speed only if this binds).
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = DEFAULT_LIMITS.max_seconds)]
     pub max_seconds: f64,
     /// Stop when a solver round lowers the loss by less than this fraction.
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = DEFAULT_LIMITS.tol)]
     pub tol: f64,
     /// Compute the loss with the exact DFT instead of the NUFFT (slow; the reference).
     #[arg(long, conflicts_with = "eps")]
@@ -60,13 +61,13 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = 1e-8)]
     pub eps: f64,
     /// 4D: radius of the blue-noise dark disc that keeps xy and uv stratified, in units of sqrt(N).
-    #[arg(long, default_value_t = 0.35)]
+    #[arg(long, default_value_t = DEFAULT_STRATA.radius)]
     pub strat_radius: f64,
     /// 4D: weight of the xy and uv stratification losses (0 leaves them free).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = DEFAULT_STRATA.weight)]
     pub strat_weight: f64,
     /// Repulsion radius in units of the mean spacing 1/sqrt(N) (0 switches repulsion off).
-    #[arg(long, default_value_t = 0.25)]
+    #[arg(long, default_value_t = DEFAULT_REPULSION.radius)]
     pub repulsion_radius: f64,
     /// Draw the starting sets from this sampler (e.g. mj, jittered; see `anisospec samplers`)
     /// instead of uniform random points. Stratified starts keep their dark axes.
@@ -84,15 +85,12 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = DEFAULT_ANNULAR_WEIGHT)]
     pub annular_weight: f64,
     /// Repulsion strength.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = DEFAULT_REPULSION.weight)]
     pub repulsion_weight: f64,
 }
 
 /// The largest `--max-seconds` accepted (about 31 years): a limit, not a schedule.
 const MAX_SECONDS: f64 = 1e9;
-
-/// The largest weight accepted for a loss term.
-const MAX_WEIGHT: f64 = 1e6;
 
 fn check_args(args: &OptimizeArgs) -> Result<()> {
     crate::cli::require_extension(
@@ -120,17 +118,6 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
             args.max_seconds
         )));
     }
-    for (flag, weight) in [
-        ("--strat-weight", args.strat_weight),
-        ("--annular-weight", args.annular_weight),
-        ("--repulsion-weight", args.repulsion_weight),
-    ] {
-        if !(weight.is_finite() && (0.0..=MAX_WEIGHT).contains(&weight)) {
-            return Err(Error::Usage(format!(
-                "{flag} {weight:?}: give a weight from 0 to {MAX_WEIGHT:e} (the loss's terms are of order 1; larger weights overflow the line search)"
-            )));
-        }
-    }
     if !(args.tol.is_finite() && args.tol >= 0.0) {
         return Err(Error::Usage(format!(
             "--tol {}: give a finite number >= 0",
@@ -139,12 +126,6 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
     }
     if !args.exact {
         Method::nufft(args.eps)?;
-    }
-    if !(args.strat_radius.is_finite() && args.strat_radius >= 0.0) {
-        return Err(Error::Usage(format!(
-            "--strat-radius {}: give a finite radius >= 0",
-            crate::error::number(args.strat_radius)
-        )));
     }
     Ok(())
 }
@@ -317,24 +298,14 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     Ok(())
 }
 
-/// Optimizes the sets of `setup`, with a progress bar over sets when stderr is a terminal.
+/// Optimizes the sets of `setup`, with a progress bar over sets (shown when stderr is a terminal).
 fn optimize_with_bar(
     setup: &Setup,
     args: &OptimizeArgs,
 ) -> Result<(PointSets, Vec<optimize::SetReport>)> {
-    let bar = if std::io::stderr().is_terminal() {
-        let b = indicatif::ProgressBar::new(args.sets as u64);
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "optimize {bar:30} {pos}/{len} sets [{elapsed_precise} < {eta}] {msg}",
-        ) {
-            b.set_style(style);
-        }
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let bar = crate::progress::bar(args.sets as u64, "optimize sets");
     let out = optimize::optimize_sets(setup, args.sets, args.seed, &|r| {
-        bar.set_message(format!("set {} loss {:.3e}", r.set, r.loss));
+        bar.set_message(format!("optimize: set {} loss {:.3e}", r.set, r.loss));
         bar.inc(1);
     });
     bar.finish_and_clear();

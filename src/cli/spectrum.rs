@@ -96,7 +96,7 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
             require_extension(path, flag, ext, what)?;
         }
     }
-    crate::spectrum::profiles::check_cones("--cones", args.cones)?;
+    crate::spectrum::profiles::check_cones(args.cones)?;
     match args.realizations {
         Some(0) => {
             return Err(Error::Usage(

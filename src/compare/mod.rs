@@ -255,7 +255,7 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
 /// earlier report, and a `cache_dir` inside `out` are refused before any work.
 pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outcome> {
     config.validate()?;
-    crate::output::check_report_folder(out, REPORT_MARKER, "--out")?;
+    crate::output::check_report_folder(out, REPORT_MARKER)?;
     check_cache_outside(cache_dir, out)?;
     crate::output::check_folder(cache_dir, "--cache", "cache")?;
     let started = Instant::now();

@@ -2,7 +2,7 @@
 
 use crate::error::{Error, Result};
 
-/// A fitted power law `y ≈ exp(intercept) · N^slope`.
+/// A fitted power law `y ≈ A N^slope` (its exponent and the exponent's errors; `A` is not kept).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SlopeFit {
     /// The exponent.
@@ -10,8 +10,6 @@ pub struct SlopeFit {
     /// Standard error of `slope`, from the points' standard errors, inflated by `sqrt(χ²/dof)` when the
     /// points scatter more than their errors allow (a curved, pre-asymptotic run).
     pub stderr: f64,
-    /// `ln A`.
-    pub intercept: f64,
     /// 95% confidence interval of the slope: `slope ± 1.96 stderr`.
     pub ci95: (f64, f64),
     /// `χ² / dof` of the fit (NaN-free: 0 with two points).
@@ -115,7 +113,6 @@ pub fn fit_power_law(n: &[f64], y: &[f64], se: &[f64], floor: &[f64]) -> Result<
     Ok(SlopeFit {
         slope,
         stderr,
-        intercept,
         ci95: (slope - 1.96 * stderr, slope + 1.96 * stderr),
         chi2_per_dof,
         errors_defined,
@@ -133,7 +130,6 @@ mod tests {
         let se: Vec<f64> = y.iter().map(|y| 0.1 * y).collect();
         let f = fit_power_law(&n, &y, &se, &[1e-15; 4]).unwrap();
         assert!((f.slope + 1.5).abs() < 1e-12);
-        assert!((f.intercept - 3f64.ln()).abs() < 1e-10);
         // Relative errors of 0.1 on ln y: se(slope) = 0.1 / sqrt(Σ (ln N − mean)²).
         let x: Vec<f64> = n.iter().map(|n| n.ln()).collect();
         let m = x.iter().sum::<f64>() / 4.0;

@@ -26,9 +26,8 @@
 //! Repulsion (per constrained projection, on the torus): `E = (λ / N) Σ_{pairs, d < r} (1 − d²/r²)²`
 //! with `r = radius / sqrt(N)`; smooth (`C¹`), zero beyond `r`, found with kiddo periodic radius queries.
 
-use super::fourier;
 use crate::points::{wrap, Projection};
-use crate::spectrum::{frequency, Method};
+use crate::spectrum::{self, frequency, Method};
 use crate::targets::TargetGrid;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
@@ -106,7 +105,7 @@ impl Objective {
         let g = &term.grid;
         let res = g.res;
         let n = self.n as f64;
-        let f = fourier::type1(&pts, res, self.method);
+        let f = spectrum::fourier_sums(&pts, res, self.method);
         let power: Vec<f64> = f.iter().map(|z| z.norm_sqr() / n).collect();
         // Annular means of the residual over the non-dark cells, and their share of the loss.
         let with_annuli = self.annular_weight > 0.0;
@@ -161,7 +160,7 @@ impl Objective {
             // 2πi (k1 + i k2) = 2π (−k2 + i k1)
             *c = f[idx] * Complex64::new(-TAU * k2, TAU * k1) * (w * r + pull);
         }
-        let gsum = fourier::type2(&coeffs, &pts, res, self.method);
+        let gsum = spectrum::type2(&coeffs, &pts, res, self.method);
         let scale = 4.0 / n;
         let ga = gsum.iter().map(|z| scale * z.re).collect();
         let gb = gsum.iter().map(|z| scale * z.im).collect();

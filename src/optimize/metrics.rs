@@ -1,11 +1,9 @@
 //! How well sets meet their target: the expected spectrum over the sets against `T` (issue 5's fit
 //! criteria).
 
-use super::fourier;
 use crate::points::{PointSets, Projection};
 use crate::spectrum::Method;
 use crate::targets::TargetGrid;
-use rayon::prelude::*;
 use serde::Serialize;
 
 /// Annuli with fewer non-dark cells than this are left out of the annular comparison.
@@ -36,31 +34,13 @@ pub struct Fit {
     pub variance_ratio: Option<f64>,
 }
 
-/// The expected spectrum `mean_s P_s(k)` of `proj` over all sets, on the grid's `res × res` frequencies.
-fn expected_power(points: &PointSets, proj: Projection, res: usize, method: Method) -> Vec<f64> {
-    let n = points.n() as f64;
-    let per_set: Vec<Vec<f64>> = (0..points.sets())
-        .into_par_iter()
-        .map(|s| {
-            let f = fourier::type1(&points.project(s, proj), res, method);
-            f.iter().map(|z| z.norm_sqr() / n).collect()
-        })
-        .collect();
-    let mut mean = vec![0.0; res * res];
-    for p in &per_set {
-        for (m, v) in mean.iter_mut().zip(p) {
-            *m += v;
-        }
-    }
-    let count = points.sets() as f64;
-    mean.iter_mut().for_each(|m| *m /= count);
-    mean
-}
-
 /// The fit of `points`' expected spectrum in `proj` to `grid` (see [`Fit`]).
 pub fn fit(points: &PointSets, proj: Projection, grid: &TargetGrid, method: Method) -> Fit {
     let res = grid.res;
-    let p = expected_power(points, proj, res, method);
+    // The grid's resolution is valid and a PointSets holds at least one set.
+    let p = crate::spectrum::expected::of_sets(points, proj, res, method)
+        .expect("a target grid's resolution and a non-empty PointSets")
+        .mean;
     let dark_sum: f64 = p
         .iter()
         .zip(&grid.dark)

@@ -13,7 +13,6 @@
 //! In 2D the target applies to the set's two coordinates. In 4D it applies to `xu` and `yv`, and `xy`
 //! and `uv` are kept stratified by a blue-noise dark-disc target.
 
-pub mod fourier;
 pub mod latin;
 pub mod lattice_design;
 pub mod loss;
@@ -30,7 +29,7 @@ use loss::{Objective, Repulsion, Term};
 use rand::Rng as _;
 use rayon::prelude::*;
 use serde::Serialize;
-pub use solver::{Limits, LogRow};
+pub use solver::{Limits, LogRow, DEFAULT_LIMITS};
 
 /// How the 4D `xy` and `uv` projections are kept stratified.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -41,12 +40,15 @@ pub struct Strata {
     pub weight: f64,
 }
 
+/// Default stratification of `xy` and `uv`: a dark disc of radius 0.35 `sqrt(N)`, weight 1.
+pub const DEFAULT_STRATA: Strata = Strata {
+    radius: 0.35,
+    weight: 1.0,
+};
+
 impl Default for Strata {
     fn default() -> Self {
-        Self {
-            radius: 0.35,
-            weight: 1.0,
-        }
+        DEFAULT_STRATA
     }
 }
 
@@ -88,6 +90,9 @@ pub const DEFAULT_REPULSION: Repulsion = Repulsion {
     radius: 0.25,
     weight: 0.1,
 };
+
+/// The largest weight accepted for a loss term.
+pub const MAX_WEIGHT: f64 = 1e6;
 
 /// Default weight `λ_a` of the annular-mean term. At 1 the term is as large as the cells' mean
 /// squared error when every cell of every annulus is off by the same amount; the cells' own
@@ -150,13 +155,24 @@ impl Setup {
         };
         for (name, v) in [
             ("--repulsion-radius", self.repulsion.radius),
+            ("--strat-radius", self.strata.radius),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::Usage(format!(
+                    "{name} {}: give a finite radius >= 0",
+                    crate::error::number(v)
+                )));
+            }
+        }
+        for (name, v) in [
             ("--repulsion-weight", self.repulsion.weight),
             ("--strat-weight", self.strata.weight),
             ("--annular-weight", self.annular_weight),
         ] {
-            if !v.is_finite() || v < 0.0 {
+            if !(v.is_finite() && (0.0..=MAX_WEIGHT).contains(&v)) {
                 return Err(Error::Usage(format!(
-                    "{name} {v}: it must be a finite number >= 0"
+                    "{name} {}: give a weight from 0 to {MAX_WEIGHT:e} (the loss's terms are of order 1; larger weights overflow the line search)",
+                    crate::error::number(v)
                 )));
             }
         }

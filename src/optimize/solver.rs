@@ -34,13 +34,16 @@ pub struct Limits {
     pub tol: f64,
 }
 
+/// Default stopping rules: 2000 iterations, 60 s per set, a round that gains less than 1e-6.
+pub const DEFAULT_LIMITS: Limits = Limits {
+    max_iters: 2000,
+    max_seconds: 60.0,
+    tol: 1e-6,
+};
+
 impl Default for Limits {
     fn default() -> Self {
-        Self {
-            max_iters: 2000,
-            max_seconds: 60.0,
-            tol: 1e-6,
-        }
+        DEFAULT_LIMITS
     }
 }
 

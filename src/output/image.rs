@@ -101,16 +101,23 @@ pub fn tone_map_log(p: f64) -> u8 {
 
 /// Writes a spectrum as PNG (log tone map, largest `k2` on top), scaled up to at least 256 pixels.
 pub fn write_spectrum_png(path: &Path, values: &[f64], res: usize) -> Result<()> {
-    let rows = spectrum_image_rows(values, res);
-    let scale = (256 / res).max(1);
-    let side = res * scale;
-    let mut pixels = vec![0u8; side * side];
-    for (y, row) in pixels.chunks_exact_mut(side).enumerate() {
-        for (x, px) in row.iter_mut().enumerate() {
-            *px = tone_map_log(rows[(y / scale) * res + x / scale]);
-        }
-    }
+    let grey: Vec<u8> = spectrum_image_rows(values, res)
+        .into_iter()
+        .map(tone_map_log)
+        .collect();
+    let (side, pixels) = upscaled(&grey, res, 256);
     write_png(path, side, side, 1, &pixels)
+}
+
+/// A square `res × res` grey image scaled up by the smallest integer factor that makes its side at
+/// least `min_side` pixels (nearest neighbour). Returns the new side and its pixels, row-major.
+pub fn upscaled(grey: &[u8], res: usize, min_side: usize) -> (usize, Vec<u8>) {
+    let scale = min_side.div_ceil(res).max(1);
+    let side = res * scale;
+    let pixels = (0..side * side)
+        .map(|i| grey[(i / side / scale) * res + (i % side) / scale])
+        .collect();
+    (side, pixels)
 }
 
 /// Writes a spectrum as a one-channel (`Y`) EXR with the raw values, largest `k2` on top.

@@ -127,14 +127,14 @@ impl ReportMarker {
     }
 }
 
-/// Checks, before any work, that `dest` (given by `flag`) may take a report marked by `marker`: it is
+/// Checks, before any work, that `dest` (given by `--out`) may take a report marked by `marker`: it is
 /// missing, empty, or holds an earlier report (its marker, and a [`MANIFEST`] of this tool if any),
 /// and it (or the nearest folder above it that exists) takes new files. A report folder holds one
 /// report, so a folder of other files (sources, say) is refused with a usage
 /// error naming it and the fix, and nothing in it is touched. Every caller of [`write_folder`] calls
 /// this first, before the work that fills the report.
-pub fn check_report_folder(dest: &Path, marker: ReportMarker, flag: &str) -> Result<()> {
-    check_folder(dest, flag, "report")?;
+pub fn check_report_folder(dest: &Path, marker: ReportMarker) -> Result<()> {
+    check_folder(dest, "--out", "report")?;
     // The folder, or the nearest one above it that exists, must take new files.
     if let Some(existing) = dest.ancestors().find(|a| a.is_dir()) {
         probe_folder(existing)?;
@@ -168,7 +168,7 @@ pub fn check_report_folder(dest: &Path, marker: ReportMarker, flag: &str) -> Res
     let more = if others.len() > 3 { ", ..." } else { "" };
     Err(Error::Usage(format!(
         "{} holds other files ({shown}{more}) and no {} of this tool, so it is not an earlier report; \
-         give {flag} a new or empty folder, or the folder of an earlier report",
+         give --out a new or empty folder, or the folder of an earlier report",
         dest.display(),
         marker.file
     )))
@@ -789,13 +789,13 @@ mod tests {
         std::fs::create_dir_all(&report).unwrap();
         std::fs::write(report.join("report.md"), "# a report").unwrap();
         std::fs::write(report.join(MANIFEST), "plots/a.png").unwrap();
-        let e = check_report_folder(&report, REPORT, "--out").unwrap_err();
+        let e = check_report_folder(&report, REPORT).unwrap_err();
         assert_eq!(e.exit_code(), 2);
         assert!(e.to_string().contains("not written by anisospec"), "{e}");
         assert_eq!(read_to(&report, MANIFEST), "plots/a.png");
         std::fs::remove_file(report.join(MANIFEST)).unwrap();
         std::fs::create_dir(report.join(MANIFEST)).unwrap();
-        let e = check_report_folder(&report, REPORT, "--out").unwrap_err();
+        let e = check_report_folder(&report, REPORT).unwrap_err();
         assert_eq!(e.exit_code(), 2);
         assert!(e.to_string().contains("cannot be read"), "{e}");
 
@@ -894,7 +894,7 @@ mod tests {
         let folder = dir.path().join("sources");
         std::fs::create_dir_all(&folder).unwrap();
         std::fs::write(folder.join("data.npy"), "mine").unwrap();
-        let e = check_report_folder(&folder, REPORT, "--out").unwrap_err();
+        let e = check_report_folder(&folder, REPORT).unwrap_err();
         assert_eq!(e.exit_code(), 2);
         let text = e.to_string();
         assert!(
@@ -908,7 +908,7 @@ mod tests {
         // A report.md that is not this tool's (another first line) marks no earlier report; and a
         // report in the folder would not replace it.
         std::fs::write(folder.join("report.md"), "# Our quarterly report").unwrap();
-        let e = check_report_folder(&folder, REPORT, "--out").unwrap_err();
+        let e = check_report_folder(&folder, REPORT).unwrap_err();
         assert_eq!(e.exit_code(), 2);
         let e = write_folder(&folder, REPORT, |stage| {
             write_atomic(&stage.join("report.md"), |w| writeln!(w, "# a report"))
@@ -923,7 +923,7 @@ mod tests {
 
         let empty = dir.path().join("empty");
         std::fs::create_dir_all(empty.join(".anisospec-killed")).unwrap();
-        check_report_folder(&empty, REPORT, "--out").unwrap();
+        check_report_folder(&empty, REPORT).unwrap();
         write_folder(&empty, REPORT, |stage| {
             write_atomic(&stage.join("report.md"), |w| writeln!(w, "new"))
         })
@@ -950,7 +950,7 @@ mod tests {
         std::fs::write(theirs.join("x.npy"), "theirs").unwrap();
         std::fs::remove_dir_all(report.join("spectra")).unwrap();
         std::os::unix::fs::symlink(&theirs, report.join("spectra")).unwrap();
-        check_report_folder(&report, REPORT, "--out").unwrap();
+        check_report_folder(&report, REPORT).unwrap();
         let e = write_folder(&report, REPORT, write).unwrap_err();
         assert_eq!(e.exit_code(), 2);
         assert!(e.to_string().contains("lies in a linked folder"), "{e}");
@@ -959,13 +959,13 @@ mod tests {
 
         let dangling = dir.path().join("dangling");
         std::os::unix::fs::symlink(dir.path().join("nowhere"), &dangling).unwrap();
-        let e = check_report_folder(&dangling, REPORT, "--out").unwrap_err();
+        let e = check_report_folder(&dangling, REPORT).unwrap_err();
         assert_eq!(e.exit_code(), 2);
         assert!(e.to_string().contains("not a folder"), "{e}");
 
         std::fs::remove_file(report.join(MANIFEST)).unwrap();
         std::os::unix::fs::symlink(report.join(MANIFEST), report.join(MANIFEST)).unwrap();
-        let e = check_report_folder(&report, REPORT, "--out").unwrap_err();
+        let e = check_report_folder(&report, REPORT).unwrap_err();
         assert_eq!(e.exit_code(), 2);
         assert!(e.to_string().contains("cannot be read"), "{e}");
     }

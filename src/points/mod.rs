@@ -145,6 +145,9 @@ pub fn project(set: &[f64], dims: usize, proj: Projection) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// The largest `f64` below 1: where coordinates that round up to 1 are clamped, to stay in `[0, 1)`.
+pub const BELOW_ONE: f64 = 1.0 - f64::EPSILON / 2.0;
+
 /// Wraps a coordinate onto `[0, 1)` (DESIGN §2: `rem_euclid`, never `fract`).
 pub fn wrap(c: f64) -> f64 {
     let w = c.rem_euclid(1.0);

@@ -11,7 +11,7 @@
 //!   in `x`; on a pixel footprint the wrap seam is a discontinuity of its own, and DESIGN §5 measured
 //!   slope −1.06, no better than unsheared.
 
-use super::wrap;
+use super::{wrap, BELOW_ONE};
 
 /// How a shear is applied.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -43,9 +43,6 @@ const NO_SHEAR: f64 = 1e-12;
 /// The largest shear magnitude accepted anywhere. `x = t − s u` cancels about `|s| · 1e-16` of `x`'s
 /// precision, so at `1e6` a sheared coordinate is still good to 1e-10; at `1e17` it is noise.
 pub const MAX_SHEAR: f64 = 1e6;
-
-/// The largest value below 1, where clamped coordinates land.
-const BELOW_ONE: f64 = 1.0 - f64::EPSILON / 2.0;
 
 /// Shears one pair `(a, b)` of pattern coordinates in `[0,1)^2` into `(x, u)` such that `x + s u` carries
 /// the stratification of `a`.

@@ -95,12 +95,7 @@ pub fn spectrum_png_pixels(p: &[f64], res: usize) -> (usize, Vec<u8>) {
             (((l + 6.0) / 6.0).clamp(0.0, 1.0) * 255.0).round() as u8
         })
         .collect();
-    let scale = PNG_MIN_SIDE.div_ceil(res).max(1);
-    let side = res * scale;
-    let pixels = (0..side * side)
-        .map(|i| grey[(i / side / scale) * res + (i % side) / scale])
-        .collect();
-    (side, pixels)
+    crate::output::image::upscaled(&grey, res, PNG_MIN_SIDE)
 }
 
 #[cfg(test)]

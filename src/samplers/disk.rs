@@ -10,9 +10,6 @@ use rand::Rng as _;
 /// Period of the unit torus, for kiddo's periodic queries.
 const TORUS: [f64; 2] = [1.0, 1.0];
 
-/// Largest value below 1.
-const BELOW_ONE: f64 = 1.0 - f64::EPSILON / 2.0;
-
 /// Radius of the densest packing of `n` disks on the unit torus (hexagonal): the minimum distance
 /// `sqrt(2 / (sqrt(3) n))` of a hexagonal lattice with `n` points per unit area.
 pub fn max_packing_radius(n: usize) -> f64 {
@@ -215,7 +212,8 @@ impl Sampler for Blue {
             for ((s, t), &c) in sites.iter_mut().zip(&sum).zip(&count) {
                 if c > 0 {
                     for d in 0..2 {
-                        s[d] = crate::points::wrap(s[d] + t[d] / c as f64).min(BELOW_ONE);
+                        s[d] = crate::points::wrap(s[d] + t[d] / c as f64)
+                            .min(crate::points::BELOW_ONE);
                     }
                 }
             }

@@ -7,9 +7,6 @@ use rand::Rng as _;
 /// Bases of the Halton sequence, one per dimension `x, y, u, v`.
 const HALTON_BASES: [u64; 4] = [2, 3, 5, 7];
 
-/// Largest value below 1: where a scrambled radical inverse that rounded up to 1 is put.
-const BELOW_ONE: f64 = 1.0 - f64::EPSILON / 2.0;
-
 /// The Halton sequence in bases 2, 3 (2D) or 2, 3, 5, 7 (4D), scrambled by an independent random
 /// permutation of the digits `0..b` at every digit position of every dimension (random digit
 /// scrambling, which keeps the sequence's stratification). Point `j` is the scrambled radical inverse
@@ -52,7 +49,7 @@ impl Sampler for Halton {
                     idx /= b;
                     scale *= inv_b;
                 }
-                out[j * d + dim] = value.min(BELOW_ONE);
+                out[j * d + dim] = value.min(crate::points::BELOW_ONE);
             }
         }
         out

@@ -5,17 +5,18 @@ use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 use std::f64::consts::TAU;
 
+/// `exp(−2πi k c)`, computed directly: `k·c` is reduced mod 1 before scaling by 2π, so the argument
+/// stays small whatever `k` and `c`.
+pub fn phase(k: i64, c: f64) -> Complex64 {
+    let t = (k as f64 * c).rem_euclid(1.0);
+    let (s, co) = (TAU * t).sin_cos();
+    Complex64::new(co, -s)
+}
+
 /// `exp(−2πi k c)` for `k = −K/2 … K/2−1`, each computed directly (no recurrence, no drift).
 fn phases(c: f64, res: usize) -> Vec<Complex64> {
     let half = (res / 2) as i64;
-    (0..res as i64)
-        .map(|j| {
-            // Reduce k·c mod 1 before scaling by 2π to keep the argument small.
-            let t = ((j - half) as f64 * c).rem_euclid(1.0);
-            let (s, co) = (TAU * t).sin_cos();
-            Complex64::new(co, -s)
-        })
-        .collect()
+    (0..res as i64).map(|j| phase(j - half, c)).collect()
 }
 
 /// `F(k) = Σ_j exp(−2πi (k1 x_j + k2 y_j))` on the `res × res` grid (layout: see [`crate::spectrum`]).

@@ -42,7 +42,7 @@ impl Method {
     }
 }
 
-/// Plans reused by [`fourier_sums`] and [`power`], keyed by `(res, eps)`: most recently used last.
+/// Plans reused by [`fourier_sums`], [`type2`] and [`power`], keyed by `(res, eps)`: most recently used last.
 static PLANS: Mutex<Vec<Arc<Nufft2d>>> = Mutex::new(Vec::new());
 /// How many plans [`PLANS`] keeps.
 const PLAN_CACHE: usize = 8;
@@ -109,6 +109,21 @@ pub fn fourier_sums(points: &[[f64; 2]], res: usize, method: Method) -> Vec<Comp
     match method {
         Method::Exact => exact::fourier_sums(points, res),
         Method::Nufft { eps } => plan_or_panic(res, eps).type1(points),
+    }
+}
+
+/// Type 2, the adjoint of [`fourier_sums`]: `g_j = Σ_k c(k) exp(+2πi (k1 x_j + k2 y_j))` for the
+/// coefficients `coeffs` on the `res × res` grid. Panics as [`fourier_sums`] does, and if
+/// `coeffs.len() != res²`.
+pub fn type2(
+    coeffs: &[Complex64],
+    points: &[[f64; 2]],
+    res: usize,
+    method: Method,
+) -> Vec<Complex64> {
+    match method {
+        Method::Exact => exact::type2(coeffs, points, res),
+        Method::Nufft { eps } => plan_or_panic(res, eps).type2(coeffs, points),
     }
 }
 

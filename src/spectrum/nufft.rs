@@ -861,6 +861,7 @@ impl Grid {
 
 /// The error the accuracy contract of [`Nufft2d::new`] bounds: the maximum relative error of a power
 /// spectrum `p` against the exact one, over the bins whose exact power is at least 1e-3 of the mean.
+/// The one definition the tests (tests/nufft.rs) and the speed-against-error benchmark measure.
 pub fn contract_error(p: &[f64], exact: &[f64]) -> f64 {
     let mean = exact.iter().sum::<f64>() / exact.len() as f64;
     p.iter()

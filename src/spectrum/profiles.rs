@@ -23,12 +23,12 @@ pub fn annulus(k1: i64, k2: i64) -> usize {
 /// its output grows with the count (one CSV column, or one running sum per realization, per cone).
 pub const MAX_CONES: usize = 360;
 
-/// Checks a cone count set by `name` (e.g. `--cones`) against [`MAX_CONES`]; the message writes
-/// `{name} {cones}`. Whether 0 is allowed is the caller's (a radial CSV takes 0 as no cones).
-pub fn check_cones(name: &str, cones: usize) -> Result<()> {
+/// Checks a cone count (the flag `--cones`) against [`MAX_CONES`]. Whether 0 is allowed is the
+/// caller's (a radial CSV takes 0 as no cones).
+pub fn check_cones(cones: usize) -> Result<()> {
     if cones > MAX_CONES {
         return Err(Error::Usage(format!(
-            "{name} {cones} is above the largest cone count, {MAX_CONES} (cones of half a degree; finer ones hold no frequency at most radii of the grid); lower it, e.g. {name} 8"
+            "--cones {cones} is above the largest cone count, {MAX_CONES} (cones of half a degree; finer ones hold no frequency at most radii of the grid); lower it, e.g. --cones 8"
         )));
     }
     Ok(())

@@ -222,9 +222,10 @@ fn finite(name: &str, v: f64) -> Result<()> {
 }
 
 /// The largest width, length or radius of a shape target, in units of `sqrt(N)`: a target reaching
-/// farther needs a grid wider than [`crate::spectrum::MAX_RES`] even at the smallest N, 2 (its fit
-/// radius is twice its reach, `2 · 1024 · sqrt(2) > 8192 / 2` cells); a width beyond it is wider than
-/// any grid. The shipped targets stay below 2.
+/// farther is judged on a grid wider than [`crate::spectrum::MAX_RES`] even at the smallest N, 2 (the
+/// fit radius is twice its reach and [`Target::check_grid`] judges over twice the fit radius:
+/// `4 · 1024 · sqrt(2) ≈ 5793 > 8192 / 2` cells); a width beyond it is wider than any grid. The
+/// shipped targets stay below 2.
 pub const MAX_SIZE: f64 = 1024.0;
 
 /// A width, length or radius `v` of key `name`: finite, in `[0, MAX_SIZE]`.

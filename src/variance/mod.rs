@@ -20,7 +20,6 @@ use crate::spectrum::{check_res, fourier_sums, frequency, Method};
 use crate::stats::Welford;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
-use std::f64::consts::TAU;
 
 /// How to predict.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -170,11 +169,7 @@ fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spe
 /// `exp(−2πi k c)` for each `k` of `ks`: runs of consecutive `k` by recurrence, recomputed directly
 /// (argument reduced mod 1) every 32 steps so that rounding cannot drift.
 fn phases(c: f64, ks: &[i64]) -> Vec<Complex64> {
-    let direct = |k: i64| {
-        let t = (k as f64 * c).rem_euclid(1.0);
-        let (s, co) = (TAU * t).sin_cos();
-        Complex64::new(co, -s)
-    };
+    let direct = |k: i64| crate::spectrum::exact::phase(k, c);
     let step = direct(1);
     let mut out: Vec<Complex64> = Vec::with_capacity(ks.len());
     let mut run = 0usize;
@@ -247,7 +242,7 @@ fn check_config(cfg: &VarianceConfig) -> Result<()> {
             "--cones 0: use at least one cone (1 = no split)".into(),
         ));
     }
-    crate::spectrum::profiles::check_cones("--cones", cfg.cones)?;
+    crate::spectrum::profiles::check_cones(cfg.cones)?;
     Ok(())
 }
 

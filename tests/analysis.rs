@@ -320,6 +320,14 @@ fn random_placement_keeps_the_rate() {
         "jittered, disc placed at random: slope {:.3} ± {:.3}",
         fit.slope, fit.stderr
     );
+    // As in the header: R = 400 over the same N gives σ(slope) ≈ 0.016, and the ±0.15 tolerance is a
+    // fair test (at least 3 standard errors, and still telling −1.5 from −1 or −2) only while the fit's
+    // own standard error stays below 0.05; a noisy fit must fail here rather than pass by luck.
+    assert!(
+        fit.stderr < 0.05,
+        "slope standard error {} too large for a fair test",
+        fit.stderr
+    );
     assert!((fit.slope + 1.5).abs() < 0.15);
     for p in &c.points {
         // Unbiased: the mean error is within 4 standard errors of 0 (sd of e ≈ sqrt(MSE)).

@@ -26,6 +26,11 @@
 //! the 1000× target. The floor at n = 320 (σ = 1.25): real-to-complex row FFTs 0.12 ms, transpose
 //! 0.03 ms, column FFTs 0.07 ms, deconvolution 0.03 ms, zeroing 0.01 ms, i.e. ≈ 0.26 ms of the
 //! 0.29 ms budget before any spreading (0.20 ms at w = 14); smaller σ would need w > 16.
+//!
+//! On a newer machine of the same kind (AMD EPYC family 26, with 512-bit AVX-512; 2026-11-23, load
+//! 2.7–3.6): `expected_spectrum` 38–41 ms (0.39 ms per realization), one exact realization 251–259 ms,
+//! so ≈ 650×. Spreading compiled for AVX-512F as well (a third `target_feature` path) ran 41–45 ms
+//! against 40–41 ms for the AVX2 path in alternating runs, so it was not kept.
 
 use anisospec::rng::stream;
 use anisospec::spectrum::nufft::{contract_error, Nufft2d};

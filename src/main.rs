@@ -1,7 +1,9 @@
 //! The `anisospec` command: see `anisospec --help`.
 
 use anisospec::cli;
-use clap::{Parser, Subcommand};
+use anisospec::error::Error;
+use clap::parser::ValueSource;
+use clap::{ArgMatches, CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::process::ExitCode;
 
 /// Design Monte Carlo sample patterns with anisotropic spectra, and measure what they buy.
@@ -43,9 +45,94 @@ enum Command {
     Compare(cli::compare::CompareArgs),
 }
 
+/// Flags that mean something only beside another, which clap's `requires` would refuse with a bare
+/// "required arguments were not provided" and a usage line that marks many flags as required:
+/// (subcommand, flag id, the flag it needs (id), that flag as written, why).
+const NEEDS: &[(&str, &str, &str, &str, &str)] = &[
+    (
+        "spectrum",
+        "cones",
+        "radial",
+        "--radial FILE.csv",
+        "the cones are columns of the radial profile CSV",
+    ),
+    (
+        "sample",
+        "shear_mode",
+        "shear",
+        "--shear sx,sy",
+        "it says how --shear shears the sets",
+    ),
+    (
+        "spectrum",
+        "shear_mode",
+        "shear",
+        "--shear sx,sy",
+        "it says how --shear shears the sets",
+    ),
+    (
+        "converge",
+        "shear_mode",
+        "shear",
+        "--shear sx,sy",
+        "it says how --shear shears the sets",
+    ),
+    (
+        "render",
+        "shear_mode",
+        "shear",
+        "--shear",
+        "it says how the oracle's shear is applied",
+    ),
+    (
+        "render",
+        "wedge_shear",
+        "shear",
+        "--shear",
+        "it chooses the oracle's shear of double-wedge pixels",
+    ),
+];
+
+/// A usage error for a flag of [`NEEDS`] given without the flag it needs.
+fn check_needs(matches: &ArgMatches) -> anisospec::error::Result<()> {
+    let Some((name, sub)) = matches.subcommand() else {
+        return Ok(());
+    };
+    let given = |id: &str| sub.value_source(id) == Some(ValueSource::CommandLine);
+    for &(command, id, needed, written, why) in NEEDS {
+        if command == name && given(id) && !given(needed) {
+            let flag = format!("--{}", id.replace('_', "-"));
+            let value = sub
+                .get_raw(id)
+                .and_then(|mut v| v.next())
+                .map(|v| format!(" {}", v.to_string_lossy()))
+                .unwrap_or_default();
+            return Err(Error::Usage(format!(
+                "{flag}{value} needs {written}: {why}; add {written}, or leave out {flag}"
+            )));
+        }
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
-    let args = Cli::parse();
-    let result = match &args.command {
+    let matches = Cli::command().get_matches();
+    let result = check_needs(&matches).and_then(|()| {
+        let args = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+        run(&args.command)
+    });
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}
+
+/// Runs one subcommand.
+fn run(command: &Command) -> anisospec::error::Result<()> {
+    match command {
         Command::Samplers => {
             for info in anisospec::samplers::catalog() {
                 let dims: Vec<String> = info.dims.iter().map(|d| format!("{d}D")).collect();
@@ -81,12 +168,5 @@ fn main() -> ExitCode {
         Command::PixelSpectrum(a) => cli::pixel_spectrum::run(a),
         Command::Optimize(a) => cli::optimize::run(a),
         Command::Compare(a) => cli::compare::run(a),
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(e.exit_code() as u8)
-        }
     }
 }

@@ -1500,7 +1500,22 @@ fn flags_that_would_be_ignored_are_refused() {
                 "-o",
                 o,
             ],
-            "--shear",
+            "--shear-mode wrap needs --shear sx,sy:",
+            &out,
+        ),
+        (
+            vec![
+                "spectrum",
+                "--sampler",
+                "random",
+                "-n",
+                "16",
+                "--cones",
+                "8",
+                "-o",
+                o,
+            ],
+            "--cones 8 needs --radial FILE.csv:",
             &out,
         ),
         (
@@ -1528,7 +1543,7 @@ fn flags_that_would_be_ignored_are_refused() {
                 "-o",
                 im,
             ],
-            "required arguments were not provided:\n  --shear",
+            "--wedge-shear none needs --shear:",
             &img,
         ),
         (
@@ -1541,7 +1556,7 @@ fn flags_that_would_be_ignored_are_refused() {
                 "-o",
                 im,
             ],
-            "required arguments were not provided:\n  --shear",
+            "--shear-mode wrap needs --shear:",
             &img,
         ),
         (

@@ -22,9 +22,9 @@ pub struct CompareArgs {
     /// seed. Save it, edit it, and run it with --config.
     #[arg(long, conflicts_with_all = ["out", "cache"])]
     pub print_config: bool,
-    /// Report folder: report.md, plots/, spectra/, CSV and npy, and manifest.txt listing them. A new
-    /// report replaces an earlier one there (the files its manifest lists go; your own files stay); a
-    /// folder of other files is refused, and so is a --cache inside it.
+    /// Report folder, made if missing: report.md, plots/, spectra/, CSV and npy, and manifest.txt
+    /// listing them. A new report replaces an earlier one there (the files its manifest lists go; your
+    /// own files stay); a folder of other files is refused, and so is a --cache inside it.
     #[arg(long, default_value = "out/compare")]
     pub out: PathBuf,
     /// Cache of pixel references and optimized tables, reused across runs (default $ANISOSPEC_CACHE

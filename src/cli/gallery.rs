@@ -31,6 +31,12 @@ const GALLERY_4D: [&str; 9] = [
     "xuyv-mj",
 ];
 
+/// The contact sheets: the dimension of the samplers they show, the file, and the title.
+const SHEETS: [(usize, &str, &str); 2] = [
+    (2, "sheet_2d_xy.png", "2D samplers, xy"),
+    (4, "sheet_4d_xu.png", "4D samplers, xu"),
+];
+
 /// The gallery's index page and its first line, which mark a folder holding an earlier gallery.
 const GALLERY_MARKER: ReportMarker = ReportMarker {
     file: "index.md",
@@ -40,8 +46,8 @@ const GALLERY_MARKER: ReportMarker = ReportMarker {
 /// Spectra of every classical sampler in one folder.
 #[derive(Debug, clap::Args)]
 pub struct GalleryArgs {
-    /// Output folder; the gallery goes in OUT/gallery, replacing an earlier gallery there (a
-    /// gallery folder of other files is refused).
+    /// Output folder, made if missing (as compare's --out); the gallery goes in OUT/gallery, replacing
+    /// an earlier gallery there (a gallery folder of other files is refused).
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
     /// Points per set; a sampler that cannot make this N uses its nearest valid N (the index says which).
@@ -53,13 +59,13 @@ pub struct GalleryArgs {
         allow_negative_numbers = true
     )]
     pub n: usize,
-    /// Frequency grid side K (even).
+    /// Frequency grid side K (even, at most 8192).
     #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub res: usize,
     /// Realizations averaged per spectrum (at most 1000000).
     #[arg(long, default_value_t = 64, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub realizations: usize,
-    /// NUFFT tolerance.
+    /// NUFFT tolerance (relative error of P), from 1e-12 to 1e-1.
     #[arg(long, default_value_t = 1e-6)]
     pub eps: f64,
     /// Random seed.
@@ -110,10 +116,7 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
             rows.push((sampler.name(), dims, proj.name(), n, stem));
             spectra.push(spec);
         }
-        for (dims, file, title) in [
-            (2, "sheet_2d_xy.png", "2D samplers, xy"),
-            (4, "sheet_4d_xu.png", "4D samplers, xu"),
-        ] {
+        for (dims, file, title) in SHEETS {
             let panels: Vec<Panel> = rows
                 .iter()
                 .zip(&spectra)
@@ -138,6 +141,11 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
                  P = 1 (white noise) mid-grey, k1 horizontal, k2 up, k = 0 at the centre.\n",
                 args.realizations, args.res, args.eps, args.seed
             )?;
+            let sheets: Vec<String> = SHEETS
+                .iter()
+                .map(|(_, file, title)| format!("[{title}]({file})"))
+                .collect();
+            writeln!(w, "Contact sheets: {}.\n", sheets.join(", "))?;
             writeln!(
                 w,
                 "| sampler | D | projection | N | spectrum | radial profile |"

@@ -22,14 +22,13 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Debug, clap::Args)]
 pub struct ShearArgs {
     /// Shear the 4D sets by sx in xu and sy in yv (written sx,sy; negative ones as
-    /// --shear=-0.5,-0.5), aligning their spectra with a defocused pixel's, e.g. the oracle's shear of
-    /// the integrand. Where a set is randomly shifted (converge), the shift moves the pattern before
-    /// it is sheared.
+    /// --shear=-0.5,-0.5; each magnitude at most 1e6), aligning their spectra with a defocused
+    /// pixel's, e.g. the oracle's shear of the integrand.
     #[arg(long, value_parser = parse_shear, allow_hyphen_values = true)]
     pub shear: Option<(f64, f64)>,
-    /// How --shear is applied: transported (seam-free, exactly uniform on the square; default) or wrap
-    /// (x − s u mod 1, which adds a seam on non-periodic integrands).
-    #[arg(long, value_parser = parse_shear_mode, default_value = "transported", requires = "shear")]
+    /// How --shear is applied (needs --shear): transported (seam-free, exactly uniform on the square)
+    /// or wrap (x − s u mod 1, which adds a seam on non-periodic integrands).
+    #[arg(long, value_parser = parse_shear_mode, default_value = "transported")]
     pub shear_mode: ShearMode,
 }
 
@@ -198,4 +197,46 @@ pub fn extension(path: &Path) -> Option<String> {
     path.extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::spectrum::nufft::{EPS_MAX, EPS_MIN};
+    use clap::{Args, Command};
+
+    /// The help of one subcommand's flags.
+    fn help<A: Args>() -> String {
+        A::augment_args(Command::new("t")).render_help().to_string()
+    }
+
+    /// Each `--help` states the limits its command enforces, with the constants' values.
+    #[test]
+    fn help_states_the_limits() {
+        assert_eq!(crate::points::MAX_COORDINATES, 1 << 28);
+        let res = format!("at most {}", crate::spectrum::MAX_RES);
+        let shear = format!("at most {:e}", crate::points::shear::MAX_SHEAR);
+        let eps = format!("from {:e} to {:e}", EPS_MIN, EPS_MAX);
+        let cases: [(String, &[&String]); 6] = [
+            (help::<super::sample::SampleArgs>(), &[&shear]),
+            (
+                help::<super::spectrum::SpectrumArgs>(),
+                &[&res, &shear, &eps],
+            ),
+            (help::<super::variance::VarianceArgs>(), &[&res, &eps]),
+            (help::<super::gallery::GalleryArgs>(), &[&res, &eps]),
+            (help::<super::optimize::OptimizeArgs>(), &[&eps]),
+            (help::<super::converge::ConvergeArgs>(), &[&shear]),
+        ];
+        for (text, needles) in &cases {
+            for needle in *needles {
+                assert!(text.contains(needle.as_str()), "{needle} not in {text}");
+            }
+        }
+        for text in [
+            help::<super::sample::SampleArgs>(),
+            help::<super::optimize::OptimizeArgs>(),
+        ] {
+            assert!(text.contains("at most 2^28 "), "{text}");
+        }
+    }
 }

@@ -31,13 +31,13 @@ pub struct OptimizeArgs {
     /// uv kept stratified).
     #[arg(long, default_value_t = 2)]
     pub dims: usize,
-    /// Points per set.
+    /// Points per set (N × sets × D at most 2^28 coordinates).
     #[arg(short = 'n', long, value_parser = super::parse_count, allow_negative_numbers = true)]
     pub n: usize,
     /// Number of sets; they are optimized in parallel, set s from random stream s of the seed.
     #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub sets: usize,
-    /// Seed of the random starts (default 1, as in every other command).
+    /// Seed of the random starts (as in every other command).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Output table, `.npy` ([sets, N, D] float64); the same numbers go to `.txt`, `.h`, a `.json`
@@ -45,30 +45,6 @@ pub struct OptimizeArgs {
     /// `-o out/fan.npy` gives `anisospec_fan` and the macros `ANISOSPEC_FAN_SETS`, `_N`, `_DIMS`.
     #[arg(short = 'o', long)]
     pub output: PathBuf,
-    /// Largest number of solver iterations per set.
-    #[arg(long, default_value_t = DEFAULT_LIMITS.max_iters)]
-    pub max_iters: u64,
-    /// Largest wall time per set, in seconds (results depend on machine speed only if this binds).
-    #[arg(long, default_value_t = DEFAULT_LIMITS.max_seconds)]
-    pub max_seconds: f64,
-    /// Stop when a solver round lowers the loss by less than this fraction.
-    #[arg(long, default_value_t = DEFAULT_LIMITS.tol)]
-    pub tol: f64,
-    /// Compute the loss with the exact DFT instead of the NUFFT (slow; the reference).
-    #[arg(long, conflicts_with = "eps")]
-    pub exact: bool,
-    /// NUFFT tolerance for the loss and its gradient.
-    #[arg(long, default_value_t = 1e-8)]
-    pub eps: f64,
-    /// 4D: radius of the blue-noise dark disc that keeps xy and uv stratified, in units of sqrt(N).
-    #[arg(long, default_value_t = DEFAULT_STRATA.radius)]
-    pub strat_radius: f64,
-    /// 4D: weight of the xy and uv stratification losses (0 leaves them free).
-    #[arg(long, default_value_t = DEFAULT_STRATA.weight)]
-    pub strat_weight: f64,
-    /// Repulsion radius in units of the mean spacing 1/sqrt(N) (0 switches repulsion off).
-    #[arg(long, default_value_t = DEFAULT_REPULSION.radius)]
-    pub repulsion_radius: f64,
     /// Draw the starting sets from this sampler (e.g. mj, jittered; see `anisospec samplers`)
     /// instead of uniform random points. Stratified starts keep their dark axes.
     #[arg(long)]
@@ -77,16 +53,42 @@ pub struct OptimizeArgs {
     /// [s/N, (s+1)/N) at its centre (by rank if the start is not stratified), and move only the
     /// others. The k1 axis then stays dark up to N, beyond the loss's frequency grid, and in 4D xy
     /// keeps the start's structure. Use it, with --init padded-pmj02 in 4D, for tables applied
-    /// through the transported shear (widened hairline, double wedge)
+    /// through the transported shear (widened hairline, double wedge).
     #[arg(long)]
     pub latin: bool,
-    /// Weight of the loss term that pulls the mean P of each annulus |k| = r (outside the dark region)
-    /// to the target's mean there (0 switches it off).
+    /// Loss: weight of the term that pulls the mean P of each annulus |k| = r (outside the dark
+    /// region) to the target's mean there; 0 (off) to 1e6.
     #[arg(long, default_value_t = DEFAULT_ANNULAR_WEIGHT)]
     pub annular_weight: f64,
-    /// Repulsion strength.
+    /// Loss: repulsion radius in units of the mean spacing 1/sqrt(N) (0 switches repulsion off).
+    #[arg(long, default_value_t = DEFAULT_REPULSION.radius)]
+    pub repulsion_radius: f64,
+    /// Loss: weight of the repulsion term; 0 (off) to 1e6.
     #[arg(long, default_value_t = DEFAULT_REPULSION.weight)]
     pub repulsion_weight: f64,
+    /// Loss, 4D: radius of the blue-noise dark disc that keeps xy and uv stratified, in units of
+    /// sqrt(N).
+    #[arg(long, default_value_t = DEFAULT_STRATA.radius)]
+    pub strat_radius: f64,
+    /// Loss, 4D: weight of the xy and uv stratification terms; 0 (leaves them free) to 1e6.
+    #[arg(long, default_value_t = DEFAULT_STRATA.weight)]
+    pub strat_weight: f64,
+    /// Compute the loss with the exact DFT instead of the NUFFT (slow; the reference).
+    #[arg(long, conflicts_with = "eps")]
+    pub exact: bool,
+    /// NUFFT tolerance for the loss and its gradient, from 1e-12 to 1e-1.
+    #[arg(long, default_value_t = 1e-8)]
+    pub eps: f64,
+    /// Largest number of solver iterations per set.
+    #[arg(long, default_value_t = DEFAULT_LIMITS.max_iters)]
+    pub max_iters: u64,
+    /// Largest wall time per set, in seconds, at most 1e9 (results depend on machine speed only if
+    /// this binds).
+    #[arg(long, default_value_t = DEFAULT_LIMITS.max_seconds)]
+    pub max_seconds: f64,
+    /// Stop when a solver round lowers the loss by less than this fraction.
+    #[arg(long, default_value_t = DEFAULT_LIMITS.tol)]
+    pub tol: f64,
 }
 
 /// The largest `--max-seconds` accepted (about 31 years): a limit, not a schedule.
@@ -260,11 +262,12 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             Ok(())
         })
     })?;
-    for f in &fits {
+    for (f, term) in fits.iter().zip(&objective.terms) {
         match f.variance_ratio {
             Some(v) => eprintln!(
-                "{}: predicted variance {v:.4e} of random sampling's (over the fit radius), over {}",
+                "{}: predicted variance {v:.4e} of random sampling's over the fit radius, |k| < {} (the frequencies the loss weighs), over {}",
                 f.proj,
+                crate::error::number((term.grid.fit_radius * 10.0).round() / 10.0),
                 super::counted(f.sets, "set")
             ),
             None => eprintln!(
@@ -279,16 +282,17 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         }
     }
     if let Some(d) = &lattice {
+        let h = d.search_res / 2;
         eprintln!(
-            "lattice z = {:?}: predicted variance {:.4e}, {:.4e} of random sampling's (over |k| < {}); every set is this lattice",
+            "lattice z = {:?}: predicted variance {:.4e}, {:.4e} of random sampling's over the lattice search's wider grid, k1 and k2 in -{h}..{} (it also counts the lattice's peaks beyond the fit radius); every set is this lattice",
             d.generator,
             d.predicted_variance,
             d.variance_ratio,
-            d.search_res / 2
+            h - 1
         );
     }
     eprintln!(
-        "wrote {} ({} of {} points in {}D, {:.1} s)",
+        "wrote {} and its .txt, .h, .json and .log.csv ({} of {} points in {}D, {:.1} s)",
         outputs[0].display(),
         super::counted(args.sets, "set"),
         args.n,

@@ -30,7 +30,7 @@ pub struct PixelSpectrumArgs {
     /// The pixel as COLUMN,ROW (row 0 at the top), e.g. --pixel 20,20.
     #[arg(long)]
     pub pixel: String,
-    /// Projection: two of x,y,u,v, e.g. xu or yv (default xu). The other two coordinates are averaged
+    /// Projection: two of x,y,u,v, e.g. xu or yv. The other two coordinates are averaged
     /// (see --average), which gives the k_other = 0 slice of the 4D spectrum.
     #[arg(long, default_value = "xu")]
     pub proj: String,

@@ -32,16 +32,16 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Shear each pixel's points by the depth oracle's shear in xu and yv (the scene needs an
-    /// aperture).
+    /// aperture; a camera whose shears could pass 1e6 in magnitude is refused).
     #[arg(long)]
     pub shear: bool,
-    /// How --shear is applied: transported (seam-free inverse-CDF transport, default) or wrap
+    /// How --shear is applied (needs --shear): transported (seam-free inverse-CDF transport) or wrap
     /// (x' = x - s u mod 1).
-    #[arg(long, default_value = "transported", value_parser = crate::cli::parse_shear_mode, requires = "shear")]
+    #[arg(long, default_value = "transported", value_parser = crate::cli::parse_shear_mode)]
     pub shear_mode: ShearMode,
-    /// With --shear, the shear of double-wedge (occluder) pixels: centre (default: the shear of the
-    /// depth at the pixel and lens centres, measured better on the whole image) or none.
-    #[arg(long, value_enum, default_value_t = WedgeShear::Centre, requires = "shear")]
+    /// The shear of double-wedge (occluder) pixels (needs --shear): centre (the shear of the depth at
+    /// the pixel and lens centres, measured better on the whole image) or none.
+    #[arg(long, value_enum, default_value_t = WedgeShear::Centre, hide_possible_values = true)]
     pub wedge_shear: WedgeShear,
     /// Write the high-count reference image (channels Y and stderr) instead of a sampled one; the
     /// sampler's flags (--sampler, --spp, --seed, --shear) do not apply.

@@ -17,11 +17,11 @@ pub struct SampleArgs {
     /// Dimensions of each point: 2 (x,y) or 4 (x,y,u,v).
     #[arg(long, default_value_t = 2)]
     pub dims: usize,
-    /// Points per set, N. Samplers with a construction constraint (e.g. jittered needs a square) name
-    /// the nearest valid N if this one is not.
+    /// Points per set, N (N × sets × D at most 2^28 coordinates). Samplers with a construction
+    /// constraint (e.g. jittered needs a square) name the nearest valid N if this one is not.
     #[arg(short = 'n', long = "n", value_parser = super::parse_count, allow_negative_numbers = true)]
     pub n: usize,
-    /// Number of independent sets to draw.
+    /// Number of independent sets to draw (N × sets × D at most 2^28 = 268435456 coordinates).
     #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub sets: usize,
     /// Random seed; set s uses stream s of this seed, so the same seed gives the same bits on any

@@ -41,7 +41,7 @@ pub struct SpectrumArgs {
     /// The first is the horizontal frequency k1, the second the vertical k2.
     #[arg(long, default_value = "xy")]
     pub proj: String,
-    /// Frequency grid side K (even): k1, k2 run over −K/2 … K/2−1.
+    /// Frequency grid side K (even, at most 8192): k1, k2 run over −K/2 … K/2−1.
     #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub res: usize,
     /// Realizations averaged (independent sets). With --sampler, default 32; with --input, at most the
@@ -73,9 +73,9 @@ pub struct SpectrumArgs {
     /// one column per directional cone.
     #[arg(long)]
     pub radial: Option<PathBuf>,
-    /// Number of directional cones in the radial CSV (cone c is centred on angle c·180°/M; cone 0 holds
-    /// the k1 axis); at most 360.
-    #[arg(long, default_value_t = 0, requires = "radial", value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
+    /// Number of directional cones in the radial CSV (needs --radial; cone c is centred on angle
+    /// c·180°/M; cone 0 holds the k1 axis); at most 360.
+    #[arg(long, default_value_t = 0, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub cones: usize,
 }
 
@@ -189,7 +189,7 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
         super::counted(spec.n, "point"),
         spec.res,
         spec.res,
-        args.output
+        outputs
             .iter()
             .map(|p| p.display().to_string())
             .collect::<Vec<_>>()

@@ -37,12 +37,13 @@ pub struct VarianceArgs {
         allow_negative_numbers = true
     )]
     pub n: Vec<usize>,
-    /// Frequency grid side K (even) in each projection; the rest of the sum is estimated as white noise
-    /// (Parseval) and reported as the tail.
+    /// Frequency grid side K (even, at most 8192) in each projection; the rest of the sum is estimated
+    /// as white noise (Parseval) and reported as the tail.
     #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub res: usize,
-    /// Grow the grid with N: K = max(--res, M·N). Discontinuous integrands under stratified samplers
-    /// need K of a few N for an accurate sum; cheap for edges aligned with an axis.
+    /// Grow the grid with N: K = max(--res, M·N), with K² times the integrand's planes at most 8192².
+    /// Discontinuous integrands under stratified samplers need K of a few N for an accurate sum; cheap
+    /// for edges aligned with an axis.
     #[arg(long, value_name = "M")]
     pub res_per_n: Option<usize>,
     /// Realizations of the sampler averaged for E[P_N(k)]; 2 to 1000000.
@@ -54,7 +55,7 @@ pub struct VarianceArgs {
     /// Use the exact DFT for full-grid spectra instead of the NUFFT.
     #[arg(long, conflicts_with = "eps")]
     pub exact: bool,
-    /// NUFFT tolerance for full-grid spectra (relative error of P).
+    /// NUFFT tolerance for full-grid spectra (relative error of P), from 1e-12 to 1e-1.
     #[arg(long, default_value_t = 1e-9)]
     pub eps: f64,
     /// Random seed of the realizations.

@@ -289,10 +289,10 @@ pub fn listing() -> String {
     }
     out.push_str(
         "pixel      a depth-of-field pixel of the built-in scene (4D: x, y in the pixel, u, v on the lens)\n\
-         \x20   px      column, from the left\n\
-         \x20   py      row, from the top\n\
+         \x20   px      column from the left, 0 to width - 1 (0 to 63 in the built-in scene); required\n\
+         \x20   py      row from the top, 0 to height - 1 (0 to 63 in the built-in scene); required\n\
          \x20   scene   optional TOML scene file overriding camera, focus and aperture\n\
-         \x20   refcount rays of the cached reference\n",
+         \x20   refcount rays of the cached reference, a power of two from 1024 to 16777216 (default 1048576)\n",
     );
     out.push_str(
         "\nWrite NAME:key=value,... (e.g. step:theta=30). Append @PROJ (two of x,y,u,v) to place a 2D\n\

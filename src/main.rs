@@ -170,3 +170,27 @@ fn run(command: &Command) -> anisospec::error::Result<()> {
         Command::Compare(a) => cli::compare::run(a),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every row of [`NEEDS`] names a subcommand and two of its flags by their clap ids: a renamed
+    /// flag would otherwise turn its row into a check that never fires.
+    #[test]
+    fn needs_rows_name_real_flags() {
+        let cli = Cli::command();
+        for &(command, id, needed, written, _) in NEEDS {
+            let sub = cli
+                .find_subcommand(command)
+                .unwrap_or_else(|| panic!("no subcommand {command}"));
+            for flag in [id, needed] {
+                assert!(
+                    sub.get_arguments().any(|a| a.get_id() == flag),
+                    "{command} has no flag with id {flag}"
+                );
+            }
+            assert!(written.starts_with(&format!("--{}", needed.replace('_', "-"))));
+        }
+    }
+}

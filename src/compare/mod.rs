@@ -33,10 +33,15 @@ pub struct Subject {
     pub class: String,
     /// The integrand.
     pub integrand: Arc<dyn Integrand>,
-    /// The oracle's shear `(sx, sy)`.
+    /// The shear `(sx, sy)` the sheared samplers use and the tables are moved by (the robustness study
+    /// scales it): an analytic integrand's configured shear; a pixel's oracle shear at its centre,
+    /// or for a double-wedge pixel the midpoint of its shear range on both axes.
     pub shear: (f64, f64),
     /// The range of shears the integrand holds.
     pub shear_range: (f64, f64),
+    /// A pixel's oracle output `(sx, sy)`: the shear at the depth seen through the pixel centre and
+    /// the lens centre (`anisospec oracle`); `None` for an analytic integrand.
+    pub oracle_shear: Option<(f64, f64)>,
 }
 
 /// What the report says of a subject.
@@ -46,10 +51,12 @@ pub struct SubjectInfo {
     pub label: String,
     /// `analytic`, or the pixel class.
     pub class: String,
-    /// The oracle's shear `(sx, sy)`.
+    /// The shear `(sx, sy)` the samplers use ([`Subject::shear`]).
     pub shear: (f64, f64),
     /// The range of shears the integrand holds.
     pub shear_range: (f64, f64),
+    /// A pixel's oracle output `(sx, sy)` at its centre ([`Subject::oracle_shear`]).
+    pub oracle_shear: Option<(f64, f64)>,
     /// The integral the errors are measured against (its exact value, or a pixel's high-count
     /// reference), in the integrand's units (radiance for a pixel).
     pub integral: f64,
@@ -60,7 +67,7 @@ pub struct SubjectInfo {
 pub enum SamplerSpec {
     /// A registry sampler, used as it is.
     Classical(String),
-    /// A registry sampler sheared by the subject's oracle shear.
+    /// A registry sampler sheared by the subject's shear ([`Subject::shear`]).
     Sheared(String, ShearMode),
     /// An optimized table built from a target file.
     Table(PathBuf),
@@ -111,7 +118,7 @@ pub fn sampler_specs(config: &CompareConfig) -> Vec<SamplerSpec> {
     specs
 }
 
-/// Builds the sampler `spec` for a subject whose oracle shear is `shear` and whose shears span
+/// Builds the sampler `spec` for a subject whose shear ([`Subject::shear`]) is `shear` and whose shears span
 /// `range`, at `n` points. Also returns the one-off set-up time in seconds (a table's optimization,
 /// as recorded when it was built; 0 for the others).
 pub fn instantiate(
@@ -201,6 +208,7 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
             integrand: f,
             shear: (a.shear[0], a.shear[1]),
             shear_range: (a.shear_range[0], a.shear_range[1]),
+            oracle_shear: None,
         });
     }
     if config.pixel_classes.is_empty() {
@@ -234,6 +242,8 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
         let f = PixelIntegrand::new(scene.clone(), px, py)?
             .with_ref_count(config.pixel_reference_count)?
             .with_cache_dir(Some(cache_dir.to_path_buf()));
+        // A double wedge's shears fan over its range: the samplers take its midpoint, not the
+        // shear at the one depth seen through the centres.
         let centre = if o.class == PixelClass::DoubleWedge {
             0.5 * (o.s_min + o.s_max)
         } else {
@@ -245,6 +255,7 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
             integrand: Arc::new(f),
             shear: (centre, centre),
             shear_range: (o.s_min, o.s_max),
+            oracle_shear: Some((o.sx, o.sy)),
         });
     }
     Ok(out)
@@ -309,6 +320,7 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
                 class: s.class.clone(),
                 shear: s.shear,
                 shear_range: s.shear_range,
+                oracle_shear: s.oracle_shear,
                 integral: s.integrand.reference().value,
             })
             .collect(),
@@ -340,7 +352,7 @@ fn check_cache_outside(cache_dir: &Path, out: &Path) -> Result<()> {
 }
 
 /// The samplers that follow the oracle (sheared and optimized), on the subjects that have a shear,
-/// with the oracle's shear scaled by `1 + e` for every error `e` (and `e = 0`), at the largest N.
+/// with their shear ([`Subject::shear`]) scaled by `1 + e` for every error `e` (and `e = 0`), at the largest N.
 /// Tables keep the shape built for the subject's true shear range; the error moves them.
 fn robustness(
     config: &CompareConfig,

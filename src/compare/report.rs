@@ -442,24 +442,45 @@ fn write_markdown(
         writeln!(w, "## Integrands\n")?;
         writeln!(
             w,
-            "| integrand | class | integral | oracle shear (sx, sy) | shear range |"
+            "Shears are in pixels per lens width. **Shear range** is the range of shears the integrand holds (for a \
+             pixel, the oracle's smallest and largest shear over its footprint and the lens). **Samplers' shear** is \
+             the one shear every sheared sampler of this report is sheared by and the tables are moved by (the \
+             robustness study scales it): an analytic integrand's configured shear; an in-focus or hairline pixel's \
+             oracle shear; for a double-wedge pixel, whose shears fan over its range, the range's midpoint on both \
+             axes. **Oracle at the pixel centre** is what `anisospec oracle` gives for the pixel (sx, sy): the shear \
+             at the depth seen through the pixel centre and the lens centre, one depth of the fan for a double \
+             wedge, so it differs from the samplers' shear there (— for an analytic integrand, which has no \
+             oracle).\n"
         )?;
-        writeln!(w, "|---|---|---|---|---|")?;
+        writeln!(
+            w,
+            "| integrand | class | integral | shear range | samplers' shear (sx, sy) | oracle at the pixel centre (sx, sy) |"
+        )?;
+        writeln!(w, "|---|---|---|---|---|---|")?;
         for SubjectInfo {
             label,
             class,
             shear,
             shear_range: range,
+            oracle_shear,
             integral,
         } in &outcome.subjects
         {
+            let midpoint = if class == "double-wedge" {
+                " (range midpoint)"
+            } else {
+                ""
+            };
+            let oracle = oracle_shear.map_or("—".to_string(), |(sx, sy)| {
+                format!("({}, {})", shear_text(sx), shear_text(sy))
+            });
             writeln!(
                 w,
-                "| {label} | {class} | {integral:.4e} | ({}, {}) | [{}, {}] |",
+                "| {label} | {class} | {integral:.4e} | [{}, {}] | ({}, {}){midpoint} | {oracle} |",
+                shear_text(range.0),
+                shear_text(range.1),
                 shear_text(shear.0),
                 shear_text(shear.1),
-                shear_text(range.0),
-                shear_text(range.1)
             )?;
         }
         for (SubjectInfo { label, .. }, files) in outcome.subjects.iter().zip(plots) {
@@ -697,7 +718,7 @@ fn write_robustness(
     writeln!(w, "\n## Robustness to oracle error\n")?;
     writeln!(
         w,
-        "At N = {}, the oracle's shear is scaled by (1 + error) for {} (the sweep). Each cell is the MSE ± its standard \
+        "At N = {}, the samplers' shear (see Integrands) is scaled by (1 + error) for {} (the sweep). Each cell is the MSE ± its standard \
          error and, in brackets, the gain over the best classical sampler on that integrand at the same N (best classical \
          MSE / this MSE; above 1 is a gain). **Worst** is the highest MSE over the sweep, at the error named; **mean** is \
          the mean MSE over the sweep (the errors share their random streams, so it has no standard error of its own). The plots below show every error. A rank-1 lattice has P = N on its dual lattice, so \
@@ -835,8 +856,7 @@ fn write_robustness_plot(path: &Path, outcome: &Outcome, label: &str) -> Result<
                 c.ns.get(at).unwrap_or(&0),
                 c.realizations
             ),
-            x_label: "error of the oracle's shear, % (it shears by the true shear × (1 + error))"
-                .into(),
+            x_label: "error of the samplers' shear, % (they shear by it × (1 + error))".into(),
             y_label: "MSE (squared integrand units)".into(),
             series,
             width: 1000,
@@ -872,8 +892,8 @@ fn write_tables(
          iterations from the start named, x and y held at the centres of its strata) and cached; each estimate \
          uses one set with a random toroidal shift. A shape table is built for one integrand's shear range: for \
          a range that holds 0 it is designed in the frame of the in-focus layer and not moved; for any other \
-         it is designed around the range's centre and moved by the oracle's shear (seam-free). A variance table is built once, for the integrand family \
-         and shear its file names, and moved by each integrand's oracle shear; with `design = \"lattice\"` its \
+         it is designed around the range's centre and moved by the samplers' shear (seam-free; see Integrands). A variance table is built once, for the integrand family \
+         and shear its file names, and moved by each integrand's samplers' shear; with `design = \"lattice\"` its \
          sets are the rank-1 lattice of lowest predicted variance, found by a search instead of the optimizer. \
          Set-up is the optimization (or search) time recorded when the table was built, also when it is read \
          back from the cache; a search's includes the whole computation of the spectrum it searches over, which \

@@ -26,9 +26,12 @@ pub struct Series {
     pub colour: Option<usize>,
 }
 
-/// Twelve colours that stay apart from one another (Tableau 10, then black and dark gold), used in
-/// order and then again with hollow markers.
-pub const PALETTE: [(u8, u8, u8); 12] = [
+/// Twenty colours that stay apart from one another on white (Tableau 10, then black, navy, teal,
+/// magenta, maroon, violet, lime, sky blue, dark olive and salmon), used in order and then again with
+/// hollow markers. Each colour has its own marker shape in [`MARKERS`], chosen so that the colours
+/// nearest one another (blue and navy or sky blue, cyan and teal, pink and magenta, brown and maroon,
+/// purple and violet, green and lime) differ in shape too.
+pub const PALETTE: [(u8, u8, u8); 20] = [
     (31, 119, 180),
     (255, 127, 14),
     (44, 160, 44),
@@ -40,8 +43,93 @@ pub const PALETTE: [(u8, u8, u8); 12] = [
     (188, 189, 34),
     (23, 190, 207),
     (0, 0, 0),
-    (184, 134, 11),
+    (0, 0, 128),
+    (0, 128, 128),
+    (200, 0, 200),
+    (128, 0, 0),
+    (110, 50, 220),
+    (90, 220, 60),
+    (120, 170, 240),
+    (85, 107, 47),
+    (250, 128, 114),
 ];
+
+/// A marker's shape.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Marker {
+    /// A disc of radius 4 px.
+    Circle,
+    /// An 8 px square.
+    Square,
+    /// A triangle pointing up.
+    TriangleUp,
+    /// A square standing on a corner.
+    Diamond,
+    /// A triangle pointing down.
+    TriangleDown,
+}
+
+/// The marker of each colour of [`PALETTE`].
+pub const MARKERS: [Marker; 20] = {
+    use Marker::*;
+    [
+        Circle,
+        Square,
+        TriangleUp,
+        Diamond,
+        TriangleDown,
+        Circle,
+        Square,
+        TriangleUp,
+        Diamond,
+        TriangleDown,
+        Square,
+        TriangleUp,
+        Circle,
+        Diamond,
+        TriangleDown,
+        Circle,
+        Square,
+        Diamond,
+        TriangleDown,
+        TriangleUp,
+    ]
+};
+
+impl Marker {
+    /// The outline's corners around the point, pixels (`None` for the circle).
+    fn corners(self) -> Option<Vec<(i32, i32)>> {
+        match self {
+            Marker::Circle => None,
+            Marker::Square => Some(vec![(-4, -4), (4, -4), (4, 4), (-4, 4)]),
+            Marker::TriangleUp => Some(vec![(0, -6), (5, 4), (-5, 4)]),
+            Marker::Diamond => Some(vec![(0, -6), (6, 0), (0, 6), (-6, 0)]),
+            Marker::TriangleDown => Some(vec![(0, 6), (5, -4), (-5, -4)]),
+        }
+    }
+}
+
+/// Draws `marker` at `at` on `area` in `style` (filled, or an outline).
+fn draw_marker<DB: DrawingBackend, CT: plotters::coord::CoordTranslate>(
+    area: &DrawingArea<DB, CT>,
+    at: CT::From,
+    marker: Marker,
+    style: ShapeStyle,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    CT::From: Clone,
+{
+    match marker.corners() {
+        None => area.draw(&Circle::new(at, 4, style)),
+        Some(corners) if style.filled => {
+            area.draw(&(EmptyElement::at(at) + Polygon::new(corners, style)))
+        }
+        Some(mut corners) => {
+            corners.push(corners[0]);
+            area.draw(&(EmptyElement::at(at) + PathElement::new(corners, style)))
+        }
+    }
+}
 
 /// How the horizontal axis is scaled (the vertical one is always logarithmic).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -96,8 +184,13 @@ const MARGIN: u32 = 12;
 const X_LABEL_AREA: u32 = 45;
 /// Width of the vertical axis's label area, pixels.
 const Y_LABEL_AREA: u32 = 80;
-/// Height of the title's band above the axes (22 px text and its padding), pixels.
+/// Height of the title's band above the axes for a one-line title (22 px text and its padding),
+/// pixels; each further line adds [`TITLE_LINE`].
 const TITLE_BAND: u32 = 40;
+/// Line pitch of a title that wraps, pixels.
+const TITLE_LINE: u32 = 26;
+/// Size of the title's text, pixels.
+const TITLE_SIZE: u32 = 22;
 /// Height of one legend entry (14 px text), pixels.
 const LEGEND_ROW: u32 = 20;
 /// Length of a legend entry's line sample, pixels; the text starts [`MARGIN`] after it.
@@ -115,7 +208,7 @@ struct LegendLayout {
 }
 
 impl LegendLayout {
-    fn new(plot: &LogLogPlot) -> std::result::Result<Self, String> {
+    fn new(plot: &LogLogPlot, title_band: u32) -> std::result::Result<Self, String> {
         let font = ("sans-serif", 14).into_font();
         let mut text = 0;
         for s in &plot.series {
@@ -124,7 +217,7 @@ impl LegendLayout {
         }
         let room = plot
             .height
-            .saturating_sub(TITLE_BAND + 2 * MARGIN + X_LABEL_AREA);
+            .saturating_sub(title_band + 2 * MARGIN + X_LABEL_AREA);
         let rows = (room / LEGEND_ROW).max(1) as usize;
         Ok(LegendLayout {
             rows,
@@ -139,18 +232,18 @@ impl LegendLayout {
     }
 }
 
-/// A series' colour, and the style of its markers: the palette in order, then round again with hollow
-/// markers.
-fn series_style(s: &Series, index: usize) -> (RGBAColor, ShapeStyle) {
+/// A series' colour, its marker and the marker's style: the palette in order, each colour with its
+/// own shape, then round again with hollow markers.
+fn series_style(s: &Series, index: usize) -> (RGBAColor, Marker, ShapeStyle) {
     let slot = s.colour.unwrap_or(index);
     let (r, g, b) = PALETTE[slot % PALETTE.len()];
     let colour = RGBColor(r, g, b).to_rgba();
-    let marker = if (slot / PALETTE.len()).is_multiple_of(2) {
+    let style = if (slot / PALETTE.len()).is_multiple_of(2) {
         colour.filled()
     } else {
         colour.stroke_width(2)
     };
-    (colour, marker)
+    (colour, MARKERS[slot % PALETTE.len()], style)
 }
 
 /// The axis range `[lo, hi]` padded by a fraction of a decade on each side, and widened to the
@@ -261,34 +354,58 @@ pub fn short_numbers(text: &str) -> String {
     out
 }
 
+/// Which way an axis runs, for how much room its labels need.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Direction {
+    /// Labels side by side: each as wide as its text.
+    Horizontal,
+    /// Labels one above the other: each one line of 14 px text.
+    Vertical,
+}
+
+/// Writes an axis's tick labels.
+type Labels = dyn Fn(&f64) -> String;
+
+/// The vertical axis of every plot: log, with its own key (labelled) and light points.
+type YAxis = plotters::coord::combinators::WithKeyPoints<LogCoord<f64>>;
+
 /// Where a log axis from `lo` to `hi` (`0 < lo < hi`) `pixels` long puts its labels: the first of
-/// powers of two (for ranges of counts, `lo ≥ 1`), 1-2-5 in each decade, every decade, and every k-th
-/// decade whose labels, as [`tick_label`] writes them in 14 px text, do not run into one another.
-/// Every axis that [`log_range`] makes holds at least one of them.
-fn log_ticks(lo: f64, hi: f64, pixels: f64) -> Vec<f64> {
+/// powers of two (for ranges of counts, `lo ≥ 1`), 1-2-5 in each decade, 1 to 9 in each decade (for
+/// a range too narrow to hold two of 1-2-5), every decade, and every k-th decade whose labels, as
+/// [`tick_label`] writes them in 14 px text, do not run into one another along `direction`: at least
+/// two labels, and every label distinct. Every axis that [`log_range`] makes holds at least one of
+/// them.
+fn log_ticks(lo: f64, hi: f64, pixels: f64, direction: Direction) -> Vec<f64> {
     let (llo, lhi) = (lo.log10(), hi.log10());
     let at = |v: f64| (v.log10() - llo) / (lhi - llo) * pixels;
-    // About 8 px per character at 14 px, and a gap of 16 px between labels.
+    // About 8 px per character at 14 px and a gap of 16 px between labels side by side; 11 px of
+    // text and a gap of 9 px one above the other.
     let width = |v: f64| 8.0 * tick_label(v).chars().count() as f64;
+    let room = |a: f64, b: f64| match direction {
+        Direction::Horizontal => (width(a) + width(b)) / 2.0 + 16.0,
+        Direction::Vertical => 20.0,
+    };
     let fits = |ticks: &[f64]| {
-        ticks
-            .windows(2)
-            .all(|w| at(w[1]) - at(w[0]) >= (width(w[0]) + width(w[1])) / 2.0 + 16.0)
+        ticks.windows(2).all(|w| {
+            at(w[1]) - at(w[0]) >= room(w[0], w[1]) && tick_label(w[0]) != tick_label(w[1])
+        })
     };
     let inside = |v: &f64| lo <= *v && *v <= hi;
     let decades = (llo.floor() as i32)..=(lhi.ceil() as i32);
+    let mantissas = |ms: &[f64]| -> Vec<f64> {
+        decades
+            .clone()
+            .flat_map(|d| ms.iter().map(move |m| m * 10f64.powi(d)))
+            .filter(inside)
+            .collect()
+    };
     let mut candidates: Vec<Vec<f64>> = Vec::new();
     if lo >= 1.0 {
         let twos = (lo.log2().ceil() as i32)..=(hi.log2().floor() as i32);
         candidates.push(twos.map(|k| 2f64.powi(k)).collect());
     }
-    candidates.push(
-        decades
-            .clone()
-            .flat_map(|d| [1.0, 2.0, 5.0].map(|m| m * 10f64.powi(d)))
-            .filter(inside)
-            .collect(),
-    );
+    candidates.push(mantissas(&[1.0, 2.0, 5.0]));
+    candidates.push(mantissas(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]));
     for step in 1..=(lhi - llo).ceil().max(1.0) as i32 {
         candidates.push(
             decades
@@ -307,6 +424,21 @@ fn log_ticks(lo: f64, hi: f64, pixels: f64) -> Vec<f64> {
         .unwrap_or_default()
 }
 
+/// The unlabelled grid lines of a log axis from `lo` to `hi` `pixels` long: 1 to 9 in each decade
+/// where a decade is at least 60 px long, else every decade (finer lines would merge into a smear).
+fn minor_ticks(lo: f64, hi: f64, pixels: f64) -> Vec<f64> {
+    let per_decade = pixels / (hi / lo).log10();
+    let steps: &[f64] = if per_decade >= 60.0 {
+        &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]
+    } else {
+        &[1.0]
+    };
+    ((lo.log10().floor() as i32)..=(hi.log10().ceil() as i32))
+        .flat_map(|d| steps.iter().map(move |m| m * 10f64.powi(d)))
+        .filter(|v| lo <= *v && *v <= hi)
+        .collect()
+}
+
 /// The label of a tick at `v`: a whole number as it is (up to 9999999), anything else by
 /// [`short_number`].
 fn tick_label(v: f64) -> String {
@@ -315,6 +447,210 @@ fn tick_label(v: f64) -> String {
     } else {
         short_number(v)
     }
+}
+
+/// `v` in scientific notation with at most 4 significant digits (`0.005` → `5e-3`).
+fn scientific(v: f64) -> String {
+    let text = format!("{v:.3e}");
+    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+    let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+    format!("{mantissa}e{exponent}")
+}
+
+/// The labels of an axis's `ticks`: by [`tick_label`], or all in scientific notation when one of
+/// them is (so that `0.005` and `5e-4` do not share an axis).
+fn axis_labels(ticks: &[f64]) -> Box<Labels> {
+    if ticks.iter().any(|&t| tick_label(t).contains('e')) {
+        Box::new(|v| scientific(*v))
+    } else {
+        Box::new(|v| tick_label(*v))
+    }
+}
+
+/// Left side bearings of the embedded font, read from its `cmap`, `hhea` and `hmtx` tables: plotters'
+/// `ab_glyph` text drawing puts each glyph's ink, not its origin, at the pen, so a glyph whose ink
+/// starts left of its origin (`j`) or well right of it (`i`, `l`) sits a pixel or two off, and `mj`
+/// reads `m j`. [`draw_text`] puts each glyph back where the font places it.
+struct Bearings {
+    /// `ascender − descender`, font units: `ab_glyph` scales a font of size `s` px by `s / height`.
+    height: f64,
+    /// Left side bearing per glyph, font units.
+    lsb: Vec<i16>,
+    /// `(start, end, glyph of start)` runs of the character map, for characters up to U+FFFF.
+    runs: Vec<(u32, u32, CmapRun)>,
+    /// The format-4 subtable (for runs that index its glyph array).
+    cmap: &'static [u8],
+}
+
+#[derive(Clone, Copy)]
+enum CmapRun {
+    /// Glyph = (character + delta) mod 65536.
+    Delta(u16),
+    /// Glyph read from the array at this byte offset in the subtable (for the run's first character),
+    /// then moved by delta when not 0.
+    Array(usize, u16),
+}
+
+fn be16(b: &[u8], at: usize) -> Option<u16> {
+    Some(u16::from_be_bytes([*b.get(at)?, *b.get(at + 1)?]))
+}
+
+fn be32(b: &[u8], at: usize) -> Option<u32> {
+    Some(u32::from_be_bytes([
+        *b.get(at)?,
+        *b.get(at + 1)?,
+        *b.get(at + 2)?,
+        *b.get(at + 3)?,
+    ]))
+}
+
+impl Bearings {
+    /// Parses `font` (a TrueType file); `None` if a table it needs is missing or malformed.
+    fn parse(font: &'static [u8]) -> Option<Self> {
+        let table = |tag: &[u8; 4]| -> Option<&'static [u8]> {
+            (0..usize::from(be16(font, 4)?)).find_map(|i| {
+                let rec = 12 + 16 * i;
+                if font.get(rec..rec + 4)? != tag {
+                    return None;
+                }
+                let (off, len) = (
+                    be32(font, rec + 8)? as usize,
+                    be32(font, rec + 12)? as usize,
+                );
+                font.get(off..off + len)
+            })
+        };
+        let hhea = table(b"hhea")?;
+        let height = f64::from(be16(hhea, 4)? as i16) - f64::from(be16(hhea, 6)? as i16);
+        let metrics = usize::from(be16(hhea, 34)?);
+        let hmtx = table(b"hmtx")?;
+        let glyphs = usize::from(be16(table(b"maxp")?, 4)?);
+        let lsb = (0..glyphs)
+            .map(|g| {
+                let at = if g < metrics {
+                    4 * g + 2
+                } else {
+                    4 * metrics + 2 * (g - metrics)
+                };
+                be16(hmtx, at).map(|v| v as i16)
+            })
+            .collect::<Option<Vec<i16>>>()?;
+        let cmap_table = table(b"cmap")?;
+        let cmap = (0..usize::from(be16(cmap_table, 2)?)).find_map(|i| {
+            let rec = 4 + 8 * i;
+            let (platform, encoding) = (be16(cmap_table, rec)?, be16(cmap_table, rec + 2)?);
+            let sub = cmap_table.get(be32(cmap_table, rec + 4)? as usize..)?;
+            ((platform, encoding) == (3, 1) || platform == 0)
+                .then_some(sub)
+                .filter(|s| be16(s, 0) == Some(4))
+        })?;
+        let segments = usize::from(be16(cmap, 6)? / 2);
+        let ends = 14;
+        let starts = ends + 2 * segments + 2;
+        let deltas = starts + 2 * segments;
+        let offsets = deltas + 2 * segments;
+        let runs = (0..segments)
+            .map(|s| {
+                let (start, end) = (be16(cmap, starts + 2 * s)?, be16(cmap, ends + 2 * s)?);
+                let (delta, offset) = (be16(cmap, deltas + 2 * s)?, be16(cmap, offsets + 2 * s)?);
+                let run = if offset == 0 {
+                    CmapRun::Delta(delta)
+                } else {
+                    CmapRun::Array(offsets + 2 * s + usize::from(offset), delta)
+                };
+                Some((u32::from(start), u32::from(end), run))
+            })
+            .collect::<Option<Vec<_>>>()?;
+        Some(Bearings {
+            height,
+            lsb,
+            runs,
+            cmap,
+        })
+    }
+
+    /// The left side bearing of `c` at `size` px, rounded down to whole pixels as `ab_glyph` places
+    /// its ink (0 for a character the font lacks).
+    fn offset(&self, c: char, size: f64) -> i32 {
+        let c = u32::from(c);
+        let glyph = self
+            .runs
+            .iter()
+            .find(|(start, end, _)| *start <= c && c <= *end)
+            .and_then(|&(start, _, run)| match run {
+                CmapRun::Delta(d) => Some((c as u16).wrapping_add(d)),
+                CmapRun::Array(at, d) => {
+                    let g = be16(self.cmap, at + 2 * (c - start) as usize)?;
+                    Some(if g == 0 { 0 } else { g.wrapping_add(d) })
+                }
+            });
+        let lsb = glyph.and_then(|g| self.lsb.get(usize::from(g))).copied();
+        (f64::from(lsb.unwrap_or(0)) * size / self.height).floor() as i32
+    }
+}
+
+static BEARINGS: std::sync::OnceLock<Option<Bearings>> = std::sync::OnceLock::new();
+
+/// Width of `text` at `size` px in the embedded font, pixels (plotters' own measure).
+pub fn text_width(text: &str, size: u32) -> u32 {
+    register_font();
+    ("sans-serif", size)
+        .into_font()
+        .box_size(text)
+        .map_or(0, |(w, _)| w)
+}
+
+/// `text` broken at spaces into lines no wider than `width` px at `size` px (a word wider than that
+/// gets a line of its own).
+pub fn wrap(text: &str, size: u32, width: u32) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    for word in text.split(' ') {
+        match lines.last_mut() {
+            Some(line) if text_width(&format!("{line} {word}"), size) <= width => {
+                line.push(' ');
+                line.push_str(word);
+            }
+            _ => lines.push(word.to_string()),
+        }
+    }
+    lines
+}
+
+/// Draws `text` at `size` px in `colour` on `area`, its top left (or top centre, with `centred`) at
+/// `(x, y)`, each glyph where the font places it (see [`Bearings`]).
+pub fn draw_text<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    text: &str,
+    (x, y): (i32, i32),
+    size: u32,
+    colour: &RGBColor,
+    centred: bool,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    register_font();
+    let style = ("sans-serif", size)
+        .into_font()
+        .color(colour)
+        .pos(Pos::new(HPos::Left, VPos::Top));
+    let x = if centred {
+        x - text_width(text, size) as i32 / 2
+    } else {
+        x
+    };
+    let Some(bearings) = BEARINGS
+        .get_or_init(|| Bearings::parse(dejavu::sans::regular()))
+        .as_ref()
+    else {
+        return area.draw_text(text, &style, (x, y));
+    };
+    for (i, c) in text.char_indices() {
+        if c.is_whitespace() {
+            continue;
+        }
+        let pen = text_width(&text[..i], size) as i32;
+        let at = (x + pen + bearings.offset(c, f64::from(size)), y);
+        area.draw_text(&text[i..i + c.len_utf8()], &style, at)?;
+    }
+    Ok(())
 }
 
 /// The range `[lo, hi]` of a linear axis, padded by 4 % of its width on each side.
@@ -364,7 +700,13 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
             path.display()
         )));
     };
-    let legend = LegendLayout::new(plot).map_err(|e| plot_error(path, e))?;
+    // The title spans the axes and the legend, wrapped to the image's width; a legend of one column
+    // is measured for a one-line title, which covers every title as wide as the axes.
+    let title = short_numbers(&plot.title);
+    let first = LegendLayout::new(plot, TITLE_BAND).map_err(|e| plot_error(path, e))?;
+    let lines = wrap(&title, TITLE_SIZE, plot.width + first.width() - 2 * MARGIN);
+    let title_band = TITLE_BAND + TITLE_LINE * (lines.len() as u32 - 1);
+    let legend = LegendLayout::new(plot, title_band).map_err(|e| plot_error(path, e))?;
     let image_width = plot.width + legend.width();
     let (w, h) = (image_width as usize, plot.height as usize);
     let mut buffer = vec![0u8; w * h * 3];
@@ -372,44 +714,61 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
         let root =
             BitMapBackend::with_buffer(&mut buffer, (image_width, plot.height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_error(path, e))?;
-        // The title spans the axes and the legend, 5 px below the top edge (with plotters' 5 px of
-        // padding either side of the 22 px text, a band of about TITLE_BAND); the rest is split
-        // between the axes and the legend.
-        let body = root
-            .margin(5, 0, 0, 0)
-            .titled(&short_numbers(&plot.title), ("sans-serif", 22))
+        // The title's lines, centred, from 10 px below the top edge; the rest (below 32 px for one
+        // line, as plotters' own title leaves) is split between the axes and the legend.
+        for (i, line) in lines.iter().enumerate() {
+            let y = 10 + (TITLE_LINE * i as u32) as i32;
+            draw_text(
+                &root,
+                line,
+                (image_width as i32 / 2, y),
+                TITLE_SIZE,
+                &BLACK,
+                true,
+            )
             .map_err(|e| plot_error(path, e))?;
+        }
+        let body = root.margin(title_band - 8, 0, 0, 0);
         let (axes, key) = body.split_horizontally(plot.width);
         let mut builder = ChartBuilder::on(&axes);
         builder
             .margin(MARGIN)
             .x_label_area_size(X_LABEL_AREA)
             .y_label_area_size(Y_LABEL_AREA);
-        let y_axis = (y0..y1).log_scale();
+        // The axes' own height less the title, the margins and the horizontal axis's label area.
+        let y_pixels =
+            f64::from(plot.height) - f64::from(title_band - 8 + 2 * MARGIN + X_LABEL_AREA);
+        let y_ticks = log_ticks(y0, y1, y_pixels, Direction::Vertical);
+        let y_label = axis_labels(&y_ticks);
+        let y_axis = (y0..y1)
+            .log_scale()
+            .with_key_points(y_ticks)
+            .with_light_points(minor_ticks(y0, y1, y_pixels));
         if x_log {
             // The axes' own width less the margins and the vertical axis's label area.
-            let ticks = log_ticks(
-                x0,
-                x1,
-                f64::from(plot.width) - f64::from(2 * MARGIN + Y_LABEL_AREA),
-            );
-            let minor: Vec<f64> = ((x0.log10().floor() as i32)..=(x1.log10().ceil() as i32))
-                .flat_map(|d| (1..10).map(move |m| m as f64 * 10f64.powi(d)))
-                .filter(|v| x0 <= *v && *v <= x1)
-                .collect();
+            let x_pixels = f64::from(plot.width) - f64::from(2 * MARGIN + Y_LABEL_AREA);
+            let x_ticks = log_ticks(x0, x1, x_pixels, Direction::Horizontal);
+            let x_label = axis_labels(&x_ticks);
             let x_axis = (x0..x1)
                 .log_scale()
-                .with_key_points(ticks)
-                .with_light_points(minor);
+                .with_key_points(x_ticks)
+                .with_light_points(minor_ticks(x0, x1, x_pixels));
             let chart = builder
                 .build_cartesian_2d(x_axis, y_axis)
                 .map_err(|e| plot_error(path, e))?;
-            draw(chart, plot, path, y0, keep, &|v| tick_label(*v))?;
+            draw(chart, plot, path, y0, keep, (&*x_label, &*y_label))?;
         } else {
             let chart = builder
                 .build_cartesian_2d(x0..x1, y_axis)
                 .map_err(|e| plot_error(path, e))?;
-            draw(chart, plot, path, y0, keep, &|v| format!("{v}"))?;
+            draw(
+                chart,
+                plot,
+                path,
+                y0,
+                keep,
+                (&|v| short_number(*v), &*y_label),
+            )?;
         }
         draw_legend(&key, plot, &legend).map_err(|e| plot_error(path, e))?;
         root.present().map_err(|e| plot_error(path, e))?;
@@ -425,13 +784,9 @@ fn draw_legend<'a>(
     layout: &LegendLayout,
 ) -> std::result::Result<(), DrawingAreaErrorKind<<BitMapBackend<'a> as DrawingBackend>::ErrorType>>
 {
-    let text = ("sans-serif", 14)
-        .into_font()
-        .color(&BLACK)
-        .pos(Pos::new(HPos::Left, VPos::Center));
     let (row, swatch) = (LEGEND_ROW as i32, SWATCH as i32);
     for (i, s) in plot.series.iter().enumerate() {
-        let (colour, marker) = series_style(s, i);
+        let (colour, marker, style) = series_style(s, i);
         let x = (i / layout.rows) as i32 * layout.column_width as i32 + MARGIN as i32 / 2;
         let y = MARGIN as i32 + (i % layout.rows) as i32 * row + row / 2;
         let line = colour.stroke_width(2);
@@ -442,27 +797,31 @@ fn draw_legend<'a>(
             }
         } else {
             area.draw(&PathElement::new(vec![(x, y), (x + swatch, y)], line))?;
-            area.draw(&Circle::new((x + swatch / 2, y), 4, marker))?;
+            draw_marker(area, (x + swatch / 2, y), marker, style)?;
         }
-        area.draw(&Text::new(
-            s.label.clone(),
-            (x + swatch + MARGIN as i32 / 2, y),
-            text.clone(),
-        ))?;
+        // 14 px text is 11 px high in plotters' layout: its top 6 px above the row's middle.
+        draw_text(
+            area,
+            &s.label,
+            (x + swatch + MARGIN as i32 / 2, y - 6),
+            14,
+            &BLACK,
+            false,
+        )?;
     }
     Ok(())
 }
 
 /// Draws the mesh and the series of `plot` on `chart`, whatever its horizontal scale, with
-/// `x_label` writing the horizontal axis's labels; `y0` is the bottom of the vertical axis (where an
+/// `x_label` and `y_label` writing the axes' labels; `y0` is the bottom of the vertical axis (where an
 /// error bar that would cross 0 ends).
 fn draw<'a, X>(
-    mut chart: ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, LogCoord<f64>>>,
+    mut chart: ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, YAxis>>,
     plot: &LogLogPlot,
     path: &Path,
     y0: f64,
     keep: impl Fn(&(f64, f64)) -> bool,
-    x_label: &dyn Fn(&f64) -> String,
+    (x_label, y_label): (&Labels, &Labels),
 ) -> Result<()>
 where
     X: Ranged<ValueType = f64> + ValueFormatter<f64>,
@@ -474,11 +833,11 @@ where
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))
         .x_label_formatter(x_label)
-        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .y_label_formatter(y_label)
         .draw()
         .map_err(|e| plot_error(path, e))?;
     for (i, s) in plot.series.iter().enumerate() {
-        let (colour, marker) = series_style(s, i);
+        let (colour, marker, marker_style) = series_style(s, i);
         let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| keep(p)).collect();
         let style = colour.stroke_width(2);
         if s.dashed {
@@ -489,9 +848,10 @@ where
             chart
                 .draw_series(LineSeries::new(pts.clone(), style))
                 .map_err(|e| plot_error(path, e))?;
-            chart
-                .draw_series(pts.iter().map(|&p| Circle::new(p, 4, marker)))
-                .map_err(|e| plot_error(path, e))?;
+            let area = chart.plotting_area();
+            for &p in &pts {
+                draw_marker(area, p, marker, marker_style).map_err(|e| plot_error(path, e))?;
+            }
         }
         if let Some(errs) = &s.errors {
             let bars = s
@@ -545,7 +905,7 @@ mod tests {
         let (width, height, buf) = read_rgb(&path);
         // The axes' 640 px and the legend's column right of them, with room for
         // (480 − 40 title − 2·12 margins − 45 axis labels) / 20 = 18 entries.
-        let legend = LegendLayout::new(&plot).unwrap();
+        let legend = LegendLayout::new(&plot, TITLE_BAND).unwrap();
         assert_eq!((legend.rows, legend.columns), (18, 1));
         assert_eq!((width, height), (640 + legend.width(), 480));
         // Not blank: many non-white pixels, and several colours (lines, text).
@@ -636,7 +996,7 @@ mod tests {
             assert!(in_legend >= 8, "series {i}: {in_legend} px of its colour");
         }
         let tall = plot(series(&|i| format!("s{i}"), 30));
-        let layout = LegendLayout::new(&tall).unwrap();
+        let layout = LegendLayout::new(&tall, TITLE_BAND).unwrap();
         assert_eq!((layout.rows, layout.columns), (18, 2));
         let c = dir.path().join("c.png");
         write_loglog_png(&c, &tall).unwrap();
@@ -708,16 +1068,16 @@ mod tests {
     fn log_axis_labels_do_not_run_together() {
         let width = 1000.0 - 24.0 - 80.0;
         let (lo, hi) = log_range([16.0, 1024.0].into_iter()).unwrap();
-        let ticks = log_ticks(lo, hi, width);
+        let ticks = log_ticks(lo, hi, width, Direction::Horizontal);
         assert_eq!(ticks, [16.0, 32.0, 64.0, 128.0, 256.0, 512.0, 1024.0]);
         let labels: Vec<String> = ticks.iter().map(|&v| tick_label(v)).collect();
         assert_eq!(labels.join(" "), "16 32 64 128 256 512 1024");
         let (lo, hi) = log_range([2e-6, 3e-3].into_iter()).unwrap();
-        let ticks = log_ticks(lo, hi, width);
+        let ticks = log_ticks(lo, hi, width, Direction::Horizontal);
         assert!(ticks.contains(&2e-6) && ticks.contains(&5e-5), "{ticks:?}");
         assert_eq!(tick_label(5e-5), "5e-5");
         let (lo, hi) = log_range([1.0, 1e6].into_iter()).unwrap();
-        let ticks = log_ticks(lo, hi, 400.0);
+        let ticks = log_ticks(lo, hi, 400.0, Direction::Horizontal);
         assert!(ticks.iter().all(|v| v.log10().fract() == 0.0), "{ticks:?}");
         for (values, pixels) in [
             (vec![16.0, 64.0], width),
@@ -728,7 +1088,7 @@ mod tests {
             (vec![0.011, 0.09], width),
         ] {
             let (lo, hi) = log_range(values.iter().copied()).unwrap();
-            let ticks = log_ticks(lo, hi, pixels);
+            let ticks = log_ticks(lo, hi, pixels, Direction::Horizontal);
             assert!(!ticks.is_empty(), "{values:?}");
             assert!(
                 ticks.iter().all(|t| lo <= *t && *t <= hi),
@@ -742,6 +1102,74 @@ mod tests {
                     "{values:?} at {pixels} px: {ticks:?}"
                 );
             }
+        }
+    }
+
+    /// A vertical log axis: at least two distinct labels whatever the range (the robustness plots'
+    /// 1.4e-7 to 3e-6 gets 1-2-5, a range of one decade's part 1 to 9), one line of text apart, the
+    /// lowest within a factor 10 of the data's bottom; labels of one axis in one notation.
+    #[test]
+    fn vertical_log_axes_label_their_whole_range() {
+        for (values, pixels) in [
+            (vec![1.4e-7, 3e-6], 600.0),
+            (vec![9e-7, 5.5e-5], 600.0),
+            (vec![8.5e-7, 1.3e-6], 600.0),
+            (vec![1e-7, 5e-3], 600.0),
+            (vec![1e-12, 1e2], 300.0),
+            (vec![2e-6, 2.2e-6], 200.0),
+        ] {
+            let (lo, hi) = log_range(values.iter().copied()).unwrap();
+            let ticks = log_ticks(lo, hi, pixels, Direction::Vertical);
+            assert!(ticks.len() >= 2, "{values:?}: {ticks:?}");
+            assert!(ticks[0] <= values[0] * 10.0, "{values:?}: {ticks:?}");
+            let at = |v: f64| (v / lo).log10() / (hi / lo).log10() * pixels;
+            for w in ticks.windows(2) {
+                assert!(at(w[1]) - at(w[0]) >= 20.0, "{values:?}: {ticks:?}");
+                assert_ne!(tick_label(w[0]), tick_label(w[1]), "{values:?}");
+            }
+        }
+        let (lo, hi) = log_range([1.4e-7, 3e-6].into_iter()).unwrap();
+        assert_eq!(
+            log_ticks(lo, hi, 600.0, Direction::Vertical),
+            [2e-7, 5e-7, 1e-6, 2e-6]
+        );
+        let label = axis_labels(&[5e-4, 1e-3, 5e-3]);
+        assert_eq!([label(&5e-4), label(&5e-3)], ["5e-4", "5e-3"]);
+        let label = axis_labels(&[16.0, 1024.0]);
+        assert_eq!(label(&1024.0), "1024");
+    }
+
+    /// The embedded font's side bearings are read (`j` starts left of its origin, `m` right of it),
+    /// and titles wrap at spaces to the width asked.
+    #[test]
+    fn text_keeps_the_fonts_spacing_and_wraps() {
+        let bearings = Bearings::parse(dejavu::sans::regular()).unwrap();
+        assert!(bearings.offset('j', 100.0) < 0, "j");
+        assert!(bearings.offset('m', 100.0) > 0, "m");
+        assert_eq!(bearings.offset('\u{10FFFF}', 100.0), 0);
+        let title =
+            "padded-mj sheared (transported), at shear 0.5: expected power spectra, K = 64, \
+                     32 realizations";
+        let lines = wrap(title, 20, 792);
+        assert!(lines.len() >= 2, "{lines:?}");
+        assert_eq!(lines.join(" "), title);
+        assert!(lines.iter().all(|l| text_width(l, 20) <= 792), "{lines:?}");
+        // Twenty series get twenty different colours; colours that look alike have different markers.
+        let mut colours = PALETTE.to_vec();
+        colours.sort_unstable();
+        colours.dedup();
+        assert_eq!(colours.len(), PALETTE.len());
+        for (a, b) in [
+            (0, 11),
+            (0, 17),
+            (9, 12),
+            (6, 13),
+            (5, 14),
+            (4, 15),
+            (2, 16),
+            (8, 18),
+        ] {
+            assert_ne!(MARKERS[a], MARKERS[b], "{a} {b}");
         }
     }
 

@@ -2,6 +2,7 @@
 //! [`super::image::write_spectrum_png`] (log10 P over [`super::image::LOG_RANGE`], larger `k2` on top).
 
 use super::image::{spectrum_image_rows, tone_map_log, write_png, LOG_RANGE};
+use super::plot::{draw_text, short_numbers, wrap};
 use crate::error::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
@@ -21,13 +22,18 @@ pub struct Panel<'a> {
 const PANEL: usize = 192;
 /// Room for a caption under each panel, pixels.
 const CAPTION: usize = 22;
-/// Room for the title, pixels.
+/// Room for a one-line title, pixels; each further line adds [`TITLE_LINE`].
 const TITLE: usize = 34;
+/// Line pitch of a title that wraps (20 px text), pixels.
+const TITLE_LINE: usize = 24;
+/// Line pitch of a footer that wraps (12 px text), pixels.
+const FOOTER_LINE: usize = 16;
 /// Gap between panels, pixels.
 const GAP: usize = 8;
 
-/// Writes `panels` in rows of `columns` under `title` (its long numbers shortened, as in plots) as an
-/// RGB PNG, with the tone map stated in a footer line.
+/// Writes `panels` in rows of `columns` under `title` (its long numbers shortened, as in plots, and
+/// wrapped at spaces to the sheet's width) as an RGB PNG, with the tone map stated in a footer (also
+/// wrapped).
 pub fn write_sheet(path: &Path, title: &str, panels: &[Panel], columns: usize) -> Result<()> {
     if panels.is_empty() || columns == 0 {
         return Err(Error::Numerical(format!(
@@ -39,7 +45,19 @@ pub fn write_sheet(path: &Path, title: &str, panels: &[Panel], columns: usize) -
     let columns = columns.min(panels.len());
     let rows = panels.len().div_ceil(columns);
     let width = GAP + columns * (PANEL + GAP);
-    let height = TITLE + rows * (PANEL + CAPTION + GAP) + CAPTION;
+    let text_width = (width - 2 * GAP) as u32;
+    let title = wrap(&short_numbers(title), 20, text_width);
+    let footer = wrap(
+        &format!(
+            "log10 P from {} (black) to {} (white); P = 1 (white noise) mid-grey; k1 right, k2 up, k = 0 at the centre",
+            LOG_RANGE.0, LOG_RANGE.1
+        ),
+        12,
+        text_width,
+    );
+    let top = TITLE + TITLE_LINE * (title.len() - 1);
+    let footer_height = CAPTION + FOOTER_LINE * (footer.len() - 1);
+    let height = top + rows * (PANEL + CAPTION + GAP) + footer_height;
     let mut buffer = vec![255u8; width * height * 3];
     let fail = |e: &dyn std::fmt::Display| {
         Error::Numerical(format!("cannot draw {}: {e}", path.display()))
@@ -48,17 +66,15 @@ pub fn write_sheet(path: &Path, title: &str, panels: &[Panel], columns: usize) -
         let root = BitMapBackend::with_buffer(&mut buffer, (width as u32, height as u32))
             .into_drawing_area();
         let text = |s: &str, x: usize, y: usize, size: u32| {
-            root.draw_text(
-                s,
-                &("sans-serif", size).into_font().color(&BLACK),
-                (x as i32, y as i32),
-            )
+            draw_text(&root, s, (x as i32, y as i32), size, &BLACK, false)
         };
-        text(&super::plot::short_numbers(title), GAP, 6, 20).map_err(|e| fail(&e))?;
+        for (i, line) in title.iter().enumerate() {
+            text(line, GAP, 6 + i * TITLE_LINE, 20).map_err(|e| fail(&e))?;
+        }
         for (p, panel) in panels.iter().enumerate() {
             let (col, row) = (p % columns, p / columns);
             let x0 = GAP + col * (PANEL + GAP);
-            let y0 = TITLE + row * (PANEL + CAPTION + GAP);
+            let y0 = top + row * (PANEL + CAPTION + GAP);
             let img = spectrum_image_rows(panel.values, panel.res);
             for y in 0..PANEL {
                 for x in 0..PANEL {
@@ -70,11 +86,10 @@ pub fn write_sheet(path: &Path, title: &str, panels: &[Panel], columns: usize) -
             }
             text(&panel.label, x0, y0 + PANEL + 3, 14).map_err(|e| fail(&e))?;
         }
-        let footer = format!(
-            "log10 P from {} (black) to {} (white); P = 1 (white noise) mid-grey; k1 right, k2 up, k = 0 at the centre",
-            LOG_RANGE.0, LOG_RANGE.1
-        );
-        text(&footer, GAP, height - CAPTION + 3, 12).map_err(|e| fail(&e))?;
+        for (i, line) in footer.iter().enumerate() {
+            let y = height - footer_height + 3 + i * FOOTER_LINE;
+            text(line, GAP, y, 12).map_err(|e| fail(&e))?;
+        }
         root.present().map_err(|e| fail(&e))?;
     }
     write_png(path, width, height, 3, &buffer)

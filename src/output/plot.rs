@@ -467,129 +467,19 @@ fn axis_labels(ticks: &[f64]) -> Box<Labels> {
     }
 }
 
-/// Left side bearings of the embedded font, read from its `cmap`, `hhea` and `hmtx` tables: plotters'
-/// `ab_glyph` text drawing puts each glyph's ink, not its origin, at the pen, so a glyph whose ink
-/// starts left of its origin (`j`) or well right of it (`i`, `l`) sits a pixel or two off, and `mj`
-/// reads `m j`. [`draw_text`] puts each glyph back where the font places it.
-struct Bearings {
-    /// `ascender − descender`, font units: `ab_glyph` scales a font of size `s` px by `s / height`.
-    height: f64,
-    /// Left side bearing per glyph, font units.
-    lsb: Vec<i16>,
-    /// `(start, end, glyph of start)` runs of the character map, for characters up to U+FFFF.
-    runs: Vec<(u32, u32, CmapRun)>,
-    /// The format-4 subtable (for runs that index its glyph array).
-    cmap: &'static [u8],
+/// The embedded font as `ab_glyph` (the crate plotters draws text with) reads it, for its left side
+/// bearings: plotters' text drawing puts each glyph's ink, not its origin, at the pen, so a glyph
+/// whose ink starts left of its origin (`j`) or well right of it (`i`, `l`) sits a pixel or two off,
+/// and `mj` reads `m j`. [`draw_text`] puts each glyph back where the font places it.
+static GLYPHS: std::sync::OnceLock<Option<ab_glyph::FontRef<'static>>> = std::sync::OnceLock::new();
+
+/// The left side bearing of `c` at `size` px, rounded down to whole pixels as `ab_glyph` places its
+/// ink (a font of size `s` px is scaled by `s / (ascent − descent)`).
+fn bearing(font: &ab_glyph::FontRef<'static>, c: char, size: f64) -> i32 {
+    use ab_glyph::Font as _;
+    let lsb = font.h_side_bearing_unscaled(font.glyph_id(c));
+    (f64::from(lsb) * size / f64::from(font.height_unscaled())).floor() as i32
 }
-
-#[derive(Clone, Copy)]
-enum CmapRun {
-    /// Glyph = (character + delta) mod 65536.
-    Delta(u16),
-    /// Glyph read from the array at this byte offset in the subtable (for the run's first character),
-    /// then moved by delta when not 0.
-    Array(usize, u16),
-}
-
-fn be16(b: &[u8], at: usize) -> Option<u16> {
-    Some(u16::from_be_bytes([*b.get(at)?, *b.get(at + 1)?]))
-}
-
-fn be32(b: &[u8], at: usize) -> Option<u32> {
-    Some(u32::from_be_bytes([
-        *b.get(at)?,
-        *b.get(at + 1)?,
-        *b.get(at + 2)?,
-        *b.get(at + 3)?,
-    ]))
-}
-
-impl Bearings {
-    /// Parses `font` (a TrueType file); `None` if a table it needs is missing or malformed.
-    fn parse(font: &'static [u8]) -> Option<Self> {
-        let table = |tag: &[u8; 4]| -> Option<&'static [u8]> {
-            (0..usize::from(be16(font, 4)?)).find_map(|i| {
-                let rec = 12 + 16 * i;
-                if font.get(rec..rec + 4)? != tag {
-                    return None;
-                }
-                let (off, len) = (
-                    be32(font, rec + 8)? as usize,
-                    be32(font, rec + 12)? as usize,
-                );
-                font.get(off..off + len)
-            })
-        };
-        let hhea = table(b"hhea")?;
-        let height = f64::from(be16(hhea, 4)? as i16) - f64::from(be16(hhea, 6)? as i16);
-        let metrics = usize::from(be16(hhea, 34)?);
-        let hmtx = table(b"hmtx")?;
-        let glyphs = usize::from(be16(table(b"maxp")?, 4)?);
-        let lsb = (0..glyphs)
-            .map(|g| {
-                let at = if g < metrics {
-                    4 * g + 2
-                } else {
-                    4 * metrics + 2 * (g - metrics)
-                };
-                be16(hmtx, at).map(|v| v as i16)
-            })
-            .collect::<Option<Vec<i16>>>()?;
-        let cmap_table = table(b"cmap")?;
-        let cmap = (0..usize::from(be16(cmap_table, 2)?)).find_map(|i| {
-            let rec = 4 + 8 * i;
-            let (platform, encoding) = (be16(cmap_table, rec)?, be16(cmap_table, rec + 2)?);
-            let sub = cmap_table.get(be32(cmap_table, rec + 4)? as usize..)?;
-            ((platform, encoding) == (3, 1) || platform == 0)
-                .then_some(sub)
-                .filter(|s| be16(s, 0) == Some(4))
-        })?;
-        let segments = usize::from(be16(cmap, 6)? / 2);
-        let ends = 14;
-        let starts = ends + 2 * segments + 2;
-        let deltas = starts + 2 * segments;
-        let offsets = deltas + 2 * segments;
-        let runs = (0..segments)
-            .map(|s| {
-                let (start, end) = (be16(cmap, starts + 2 * s)?, be16(cmap, ends + 2 * s)?);
-                let (delta, offset) = (be16(cmap, deltas + 2 * s)?, be16(cmap, offsets + 2 * s)?);
-                let run = if offset == 0 {
-                    CmapRun::Delta(delta)
-                } else {
-                    CmapRun::Array(offsets + 2 * s + usize::from(offset), delta)
-                };
-                Some((u32::from(start), u32::from(end), run))
-            })
-            .collect::<Option<Vec<_>>>()?;
-        Some(Bearings {
-            height,
-            lsb,
-            runs,
-            cmap,
-        })
-    }
-
-    /// The left side bearing of `c` at `size` px, rounded down to whole pixels as `ab_glyph` places
-    /// its ink (0 for a character the font lacks).
-    fn offset(&self, c: char, size: f64) -> i32 {
-        let c = u32::from(c);
-        let glyph = self
-            .runs
-            .iter()
-            .find(|(start, end, _)| *start <= c && c <= *end)
-            .and_then(|&(start, _, run)| match run {
-                CmapRun::Delta(d) => Some((c as u16).wrapping_add(d)),
-                CmapRun::Array(at, d) => {
-                    let g = be16(self.cmap, at + 2 * (c - start) as usize)?;
-                    Some(if g == 0 { 0 } else { g.wrapping_add(d) })
-                }
-            });
-        let lsb = glyph.and_then(|g| self.lsb.get(usize::from(g))).copied();
-        (f64::from(lsb.unwrap_or(0)) * size / self.height).floor() as i32
-    }
-}
-
-static BEARINGS: std::sync::OnceLock<Option<Bearings>> = std::sync::OnceLock::new();
 
 /// Width of `text` at `size` px in the embedded font, pixels (plotters' own measure).
 pub fn text_width(text: &str, size: u32) -> u32 {
@@ -617,7 +507,7 @@ pub fn wrap(text: &str, size: u32, width: u32) -> Vec<String> {
 }
 
 /// Draws `text` at `size` px in `colour` on `area`, its top left (or top centre, with `centred`) at
-/// `(x, y)`, each glyph where the font places it (see [`Bearings`]).
+/// `(x, y)`, each glyph where the font places it (see [`GLYPHS`]).
 pub fn draw_text<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     text: &str,
@@ -636,8 +526,8 @@ pub fn draw_text<DB: DrawingBackend>(
     } else {
         x
     };
-    let Some(bearings) = BEARINGS
-        .get_or_init(|| Bearings::parse(dejavu::sans::regular()))
+    let Some(font) = GLYPHS
+        .get_or_init(|| ab_glyph::FontRef::try_from_slice(dejavu::sans::regular()).ok())
         .as_ref()
     else {
         return area.draw_text(text, &style, (x, y));
@@ -647,7 +537,7 @@ pub fn draw_text<DB: DrawingBackend>(
             continue;
         }
         let pen = text_width(&text[..i], size) as i32;
-        let at = (x + pen + bearings.offset(c, f64::from(size)), y);
+        let at = (x + pen + bearing(font, c, f64::from(size)), y);
         area.draw_text(&text[i..i + c.len_utf8()], &style, at)?;
     }
     Ok(())
@@ -1143,10 +1033,9 @@ mod tests {
     /// and titles wrap at spaces to the width asked.
     #[test]
     fn text_keeps_the_fonts_spacing_and_wraps() {
-        let bearings = Bearings::parse(dejavu::sans::regular()).unwrap();
-        assert!(bearings.offset('j', 100.0) < 0, "j");
-        assert!(bearings.offset('m', 100.0) > 0, "m");
-        assert_eq!(bearings.offset('\u{10FFFF}', 100.0), 0);
+        let font = ab_glyph::FontRef::try_from_slice(dejavu::sans::regular()).unwrap();
+        assert!(bearing(&font, 'j', 100.0) < 0, "j");
+        assert!(bearing(&font, 'm', 100.0) > 0, "m");
         let title =
             "padded-mj sheared (transported), at shear 0.5: expected power spectra, K = 64, \
                      32 realizations";

@@ -139,7 +139,10 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
                 w,
                 "{} realizations each, K = {}, NUFFT eps = {}, seed {}. PNG: log10 P from -2 (black) to 1 (white), \
                  P = 1 (white noise) mid-grey, k1 horizontal, k2 up, k = 0 at the centre.\n",
-                args.realizations, args.res, args.eps, args.seed
+                args.realizations,
+                args.res,
+                crate::error::number(args.eps),
+                args.seed
             )?;
             let sheets: Vec<String> = SHEETS
                 .iter()

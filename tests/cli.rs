@@ -2501,3 +2501,43 @@ fn negative_counts_are_named_by_their_flag() {
         rejects(&args, "a count is a whole number, 0 or more, not -2", &out);
     }
 }
+
+/// A negative value for a real-valued flag reaches the flag's own check (exit 2, the flag and the
+/// value named, no output) instead of being taken for an unknown flag.
+#[test]
+fn negative_reals_reach_their_flags_check() {
+    let (_dir, out) = tmp("t.npy");
+    let o = out.to_str().unwrap();
+    let spectrum = ["spectrum", "--sampler", "random", "-n", "16", "--eps", "-1"];
+    let mut args = spectrum.to_vec();
+    args.extend(["-o", o]);
+    rejects(&args, "NUFFT tolerance -1 is out of range", &out);
+    for (flag, message) in [
+        (
+            "--strat-radius",
+            "--strat-radius -1: give a finite radius >= 0",
+        ),
+        (
+            "--repulsion-weight",
+            "--repulsion-weight -1: give a weight from 0",
+        ),
+        ("--tol", "--tol -1: give a finite number >= 0"),
+        (
+            "--max-seconds",
+            "--max-seconds -1: give a positive number of seconds",
+        ),
+    ] {
+        let args = [
+            "optimize",
+            "--target",
+            "targets/blue-noise.toml",
+            "-n",
+            "16",
+            flag,
+            "-1",
+            "-o",
+            o,
+        ];
+        rejects(&args, message, &out);
+    }
+}

@@ -66,7 +66,7 @@ pub struct GalleryArgs {
     #[arg(long, default_value_t = 64, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub realizations: usize,
     /// NUFFT tolerance (relative error of P), from 1e-12 to 1e-1.
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = 1e-6, allow_negative_numbers = true)]
     pub eps: f64,
     /// Random seed.
     #[arg(long, default_value_t = 1)]

@@ -58,36 +58,36 @@ pub struct OptimizeArgs {
     pub latin: bool,
     /// Loss: weight of the term that pulls the mean P of each annulus |k| = r (outside the dark
     /// region) to the target's mean there; 0 (off) to 1e6.
-    #[arg(long, default_value_t = DEFAULT_ANNULAR_WEIGHT)]
+    #[arg(long, default_value_t = DEFAULT_ANNULAR_WEIGHT, allow_negative_numbers = true)]
     pub annular_weight: f64,
     /// Loss: repulsion radius in units of the mean spacing 1/sqrt(N) (0 switches repulsion off).
-    #[arg(long, default_value_t = DEFAULT_REPULSION.radius)]
+    #[arg(long, default_value_t = DEFAULT_REPULSION.radius, allow_negative_numbers = true)]
     pub repulsion_radius: f64,
     /// Loss: weight of the repulsion term; 0 (off) to 1e6.
-    #[arg(long, default_value_t = DEFAULT_REPULSION.weight)]
+    #[arg(long, default_value_t = DEFAULT_REPULSION.weight, allow_negative_numbers = true)]
     pub repulsion_weight: f64,
     /// Loss, 4D: radius of the blue-noise dark disc that keeps xy and uv stratified, in units of
     /// sqrt(N).
-    #[arg(long, default_value_t = DEFAULT_STRATA.radius)]
+    #[arg(long, default_value_t = DEFAULT_STRATA.radius, allow_negative_numbers = true)]
     pub strat_radius: f64,
     /// Loss, 4D: weight of the xy and uv stratification terms; 0 (leaves them free) to 1e6.
-    #[arg(long, default_value_t = DEFAULT_STRATA.weight)]
+    #[arg(long, default_value_t = DEFAULT_STRATA.weight, allow_negative_numbers = true)]
     pub strat_weight: f64,
     /// Compute the loss with the exact DFT instead of the NUFFT (slow; the reference).
     #[arg(long, conflicts_with = "eps")]
     pub exact: bool,
     /// NUFFT tolerance for the loss and its gradient, from 1e-12 to 1e-1.
-    #[arg(long, default_value_t = 1e-8)]
+    #[arg(long, default_value_t = 1e-8, allow_negative_numbers = true)]
     pub eps: f64,
     /// Largest number of solver iterations per set.
     #[arg(long, default_value_t = DEFAULT_LIMITS.max_iters)]
     pub max_iters: u64,
     /// Largest wall time per set, in seconds, at most 1e9 (results depend on machine speed only if
     /// this binds).
-    #[arg(long, default_value_t = DEFAULT_LIMITS.max_seconds)]
+    #[arg(long, default_value_t = DEFAULT_LIMITS.max_seconds, allow_negative_numbers = true)]
     pub max_seconds: f64,
     /// Stop when a solver round lowers the loss by less than this fraction.
-    #[arg(long, default_value_t = DEFAULT_LIMITS.tol)]
+    #[arg(long, default_value_t = DEFAULT_LIMITS.tol, allow_negative_numbers = true)]
     pub tol: f64,
 }
 
@@ -116,8 +116,8 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
     if !(args.max_seconds.is_finite() && args.max_seconds > 0.0 && args.max_seconds <= MAX_SECONDS)
     {
         return Err(Error::Usage(format!(
-            "--max-seconds {:?}: give a positive number of seconds, at most {MAX_SECONDS:e}",
-            args.max_seconds
+            "--max-seconds {}: give a positive number of seconds, at most {MAX_SECONDS:e}",
+            crate::error::number(args.max_seconds)
         )));
     }
     if !(args.tol.is_finite() && args.tol >= 0.0) {

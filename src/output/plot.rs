@@ -246,13 +246,19 @@ fn series_style(s: &Series, index: usize) -> (RGBAColor, Marker, ShapeStyle) {
     (colour, MARKERS[slot % PALETTE.len()], style)
 }
 
+/// The values a log axis shows: 1e-300 to 1e300.
+const LOG_LIMITS: (f64, f64) = (1e-300, 1e300);
+
 /// The axis range `[lo, hi]` padded by a fraction of a decade on each side, and widened to the
 /// enclosing decades when it holds no power of ten: plotters puts the vertical axis's labels at the
 /// powers of ten in range (and between them), and [`log_ticks`] falls back on them, so a range inside
 /// one decade (N = 16 to 64) would otherwise get an axis with no label at all.
+///
+/// Values outside [`LOG_LIMITS`] are left out (and not drawn), and the padded range stays within a
+/// decade of them, so that every decade of the axis is a normal `f64` and the tick search is finite.
 fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     let (lo, hi) = values
-        .filter(|v| v.is_finite() && *v > 0.0)
+        .filter(|v| (LOG_LIMITS.0..=LOG_LIMITS.1).contains(v))
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
             (a.min(v), b.max(v))
         });
@@ -265,7 +271,10 @@ fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
         (lo / 2.0, hi * 2.0)
     };
     let pad = ((hi / lo).log10() * 0.05).max(0.05);
-    let (lo, hi) = (lo / 10f64.powf(pad), hi * 10f64.powf(pad));
+    let (lo, hi) = (
+        (lo / 10f64.powf(pad)).max(LOG_LIMITS.0 / 10.0),
+        (hi * 10f64.powf(pad)).min(LOG_LIMITS.1 * 10.0),
+    );
     if 10f64.powf(lo.log10().ceil()) <= hi {
         Some((lo, hi))
     } else {
@@ -370,12 +379,12 @@ type Labels = dyn Fn(&f64) -> String;
 type YAxis = plotters::coord::combinators::WithKeyPoints<LogCoord<f64>>;
 
 /// Where a log axis from `lo` to `hi` (`0 < lo < hi`) `pixels` long puts its labels: the first of
-/// powers of two (for ranges of counts, `lo ≥ 1`), 1-2-5 in each decade, 1 to 9 in each decade (for
+/// powers of two (with `powers_of_two`, for a horizontal axis of counts such as N, `lo ≥ 1`), 1-2-5 in each decade, 1 to 9 in each decade (for
 /// a range too narrow to hold two of 1-2-5), every decade, and every k-th decade whose labels, as
 /// [`tick_label`] writes them in 14 px text, do not run into one another along `direction`: at least
 /// two labels, and every label distinct. Every axis that [`log_range`] makes holds at least one of
 /// them.
-fn log_ticks(lo: f64, hi: f64, pixels: f64, direction: Direction) -> Vec<f64> {
+fn log_ticks(lo: f64, hi: f64, pixels: f64, direction: Direction, powers_of_two: bool) -> Vec<f64> {
     let (llo, lhi) = (lo.log10(), hi.log10());
     let at = |v: f64| (v.log10() - llo) / (lhi - llo) * pixels;
     // About 8 px per character at 14 px and a gap of 16 px between labels side by side; 11 px of
@@ -400,7 +409,7 @@ fn log_ticks(lo: f64, hi: f64, pixels: f64, direction: Direction) -> Vec<f64> {
             .collect()
     };
     let mut candidates: Vec<Vec<f64>> = Vec::new();
-    if lo >= 1.0 {
+    if powers_of_two && lo >= 1.0 {
         let twos = (lo.log2().ceil() as i32)..=(hi.log2().floor() as i32);
         candidates.push(twos.map(|k| 2f64.powi(k)).collect());
     }
@@ -628,7 +637,7 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
         // The axes' own height less the title, the margins and the horizontal axis's label area.
         let y_pixels =
             f64::from(plot.height) - f64::from(title_band - 8 + 2 * MARGIN + X_LABEL_AREA);
-        let y_ticks = log_ticks(y0, y1, y_pixels, Direction::Vertical);
+        let y_ticks = log_ticks(y0, y1, y_pixels, Direction::Vertical, false);
         let y_label = axis_labels(&y_ticks);
         let y_axis = (y0..y1)
             .log_scale()
@@ -637,7 +646,7 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
         if x_log {
             // The axes' own width less the margins and the vertical axis's label area.
             let x_pixels = f64::from(plot.width) - f64::from(2 * MARGIN + Y_LABEL_AREA);
-            let x_ticks = log_ticks(x0, x1, x_pixels, Direction::Horizontal);
+            let x_ticks = log_ticks(x0, x1, x_pixels, Direction::Horizontal, true);
             let x_label = axis_labels(&x_ticks);
             let x_axis = (x0..x1)
                 .log_scale()
@@ -958,16 +967,16 @@ mod tests {
     fn log_axis_labels_do_not_run_together() {
         let width = 1000.0 - 24.0 - 80.0;
         let (lo, hi) = log_range([16.0, 1024.0].into_iter()).unwrap();
-        let ticks = log_ticks(lo, hi, width, Direction::Horizontal);
+        let ticks = log_ticks(lo, hi, width, Direction::Horizontal, true);
         assert_eq!(ticks, [16.0, 32.0, 64.0, 128.0, 256.0, 512.0, 1024.0]);
         let labels: Vec<String> = ticks.iter().map(|&v| tick_label(v)).collect();
         assert_eq!(labels.join(" "), "16 32 64 128 256 512 1024");
         let (lo, hi) = log_range([2e-6, 3e-3].into_iter()).unwrap();
-        let ticks = log_ticks(lo, hi, width, Direction::Horizontal);
+        let ticks = log_ticks(lo, hi, width, Direction::Horizontal, true);
         assert!(ticks.contains(&2e-6) && ticks.contains(&5e-5), "{ticks:?}");
         assert_eq!(tick_label(5e-5), "5e-5");
         let (lo, hi) = log_range([1.0, 1e6].into_iter()).unwrap();
-        let ticks = log_ticks(lo, hi, 400.0, Direction::Horizontal);
+        let ticks = log_ticks(lo, hi, 400.0, Direction::Horizontal, true);
         assert!(ticks.iter().all(|v| v.log10().fract() == 0.0), "{ticks:?}");
         for (values, pixels) in [
             (vec![16.0, 64.0], width),
@@ -978,7 +987,7 @@ mod tests {
             (vec![0.011, 0.09], width),
         ] {
             let (lo, hi) = log_range(values.iter().copied()).unwrap();
-            let ticks = log_ticks(lo, hi, pixels, Direction::Horizontal);
+            let ticks = log_ticks(lo, hi, pixels, Direction::Horizontal, true);
             assert!(!ticks.is_empty(), "{values:?}");
             assert!(
                 ticks.iter().all(|t| lo <= *t && *t <= hi),
@@ -1009,7 +1018,7 @@ mod tests {
             (vec![2e-6, 2.2e-6], 200.0),
         ] {
             let (lo, hi) = log_range(values.iter().copied()).unwrap();
-            let ticks = log_ticks(lo, hi, pixels, Direction::Vertical);
+            let ticks = log_ticks(lo, hi, pixels, Direction::Vertical, false);
             assert!(ticks.len() >= 2, "{values:?}: {ticks:?}");
             assert!(ticks[0] <= values[0] * 10.0, "{values:?}: {ticks:?}");
             let at = |v: f64| (v / lo).log10() / (hi / lo).log10() * pixels;
@@ -1020,7 +1029,7 @@ mod tests {
         }
         let (lo, hi) = log_range([1.4e-7, 3e-6].into_iter()).unwrap();
         assert_eq!(
-            log_ticks(lo, hi, 600.0, Direction::Vertical),
+            log_ticks(lo, hi, 600.0, Direction::Vertical, false),
             [2e-7, 5e-7, 1e-6, 2e-6]
         );
         let label = axis_labels(&[5e-4, 1e-3, 5e-3]);
@@ -1086,5 +1095,28 @@ mod tests {
         }
         // Within a decade: the enclosing one, not more.
         assert_eq!(log_range([16.0, 64.0].into_iter()), Some((10.0, 100.0)));
+    }
+
+    /// Values at the ends of the floating-point range: those beyond [`LOG_LIMITS`] are left out, the
+    /// range stays finite and normal, and the ticks are found (an infinite range used to make the
+    /// tick search run over every `i32` decade).
+    #[test]
+    fn extreme_values_keep_a_finite_axis() {
+        assert_eq!(log_range([1.7e308, 1e-310, 0.0].into_iter()), None);
+        for values in [
+            vec![1e-300, 1e300],
+            vec![16.0, 1.7e308],
+            vec![1e-310, 1e-299],
+        ] {
+            let (lo, hi) = log_range(values.iter().copied()).unwrap();
+            assert!(
+                lo >= f64::MIN_POSITIVE && hi < f64::INFINITY,
+                "{values:?}: [{lo}, {hi}]"
+            );
+            for (direction, twos) in [(Direction::Vertical, false), (Direction::Horizontal, true)] {
+                let ticks = log_ticks(lo, hi, 600.0, direction, twos);
+                assert!(!ticks.is_empty(), "{values:?}: no ticks");
+            }
+        }
     }
 }

@@ -230,25 +230,22 @@ fn back_wall_pixel_sheared_beats_padded_mj() {
     }
     // Padded MJ is only N-rooks in xu, so the wall's hairline (off the axes) sees white noise: its
     // MSE is σ²_int / N for the part of the pixel that is not a function of (x, y) or of (u, v) alone,
-    // plus the two main effects, which 2D MJ stratifies and which fall faster than 1 / N but are at
-    // most their IID share σ²_main / N. So N · MSE is non-increasing from σ² (at worst) to σ²_int: the
-    // claim is a slope of −1 up to that transient, which only steepens it, and no rate gain beyond it.
-    // Margin of the transient: for 5 nearly equally weighted points equally spaced in ln N (se/MSE is
-    // 0.08–0.09 at every N here), a non-increasing ln(N · MSE) of range Δ moves the least-squares slope
-    // by at most 3Δ / (10 ln 4) = 0.216 Δ (the worst case is a step after the second point). Measured
-    // with these seeds, N · MSE is 0.011–0.014 for random (σ²) and 0.0068–0.0087 for padded MJ at
-    // N ≥ 256 (≥ σ²_int), so σ² / σ²_int < 2, Δ < ln 2 and the margin is 0.216 ln 2 = 0.15.
+    // plus the two main effects, which 2D MJ stratifies and which fall faster than 1 / N. So its slope
+    // is −1 or steeper, never shallower: that is asserted. How much steeper the main effects' transient
+    // makes it over these N depends on σ²_int, which nothing here bounds from below, so no lower bound
+    // is asserted (one taken from the points' own spread could not fail: the least-squares slope of
+    // five equally spaced points never exceeds 0.216 times their range). The claim the test is named
+    // for is the comparison below.
     // Statistics: R = 256 gives σ(slope) ≈ sqrt(2 / 256) / sqrt(19.2) ≈ 0.02 (tests/analysis.rs's
-    // header; measured 0.020), bounded below 0.05 so that −1 − 0.15 − 3 se0 stays above the −1.5 the
-    // sheared set reaches.
+    // header; measured 0.020), bounded below 0.05 so that 3 se stays small beside the gap to the
+    // sheared set's −1.5.
     assert!(
         se0 < 0.05,
         "padded MJ slope error {se0} too large for a fair test"
     );
-    let margin = 3.0 * std::f64::consts::LN_2 / (10.0 * 4f64.ln());
     assert!(
-        s0 < -1.0 + 3.0 * se0 && s0 > -1.0 - margin - 3.0 * se0,
-        "padded MJ slope {s0} ± {se0} is not -1 (up to a transient of {margin:.3})"
+        s0 < -1.0 + 3.0 * se0,
+        "padded MJ slope {s0} ± {se0} is shallower than white noise's -1"
     );
     assert!(
         s1 < s0 - 3.0 * (se0 * se0 + se1 * se1).sqrt(),

@@ -49,7 +49,8 @@ pub struct CompareConfig {
     pub seed: u64,
     /// Classical 4D samplers, used as they are (see `anisospec samplers`).
     pub classical: Vec<String>,
-    /// 4D samplers sheared by each integrand's oracle shear, once per mode in `shear_modes`.
+    /// 4D samplers sheared by each integrand's shear ([`super::Subject::shear`]), once per mode in
+    /// `shear_modes`.
     pub sheared: Vec<String>,
     /// How the oracle's shear is applied to `sheared`.
     pub shear_modes: Vec<ShearMode>,

@@ -522,7 +522,7 @@ fn write_markdown(
 }
 
 /// The answer first: per integrand, at the largest N, the best classical sampler and the sampler with
-/// the lowest MSE, its gain, its cost, and its worst gain when the oracle's shear is off.
+/// the lowest MSE, its gain, its cost, and its worst gain when the samplers' shear is off.
 fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
     let c = &outcome.config;
     let at = largest_n_index(&c.ns);
@@ -534,7 +534,7 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
         "At N = {nmax}: the classical sampler with the lowest MSE, and the sampler with the lowest MSE of all \
          (samplers that tie bit for bit are named together, the one most robust to oracle error first), its gain over that classical sampler (its MSE \
          divided by this one's), its time per estimate and its one-off set-up, and its lowest gain when the \
-         oracle's shear is off by {errors}, with the error where it falls (for the first named; — when it does not use \
+         samplers' shear (the oracle's; see Integrands) is off by {errors}, with the error where it falls (for the first named; — when it does not use \
          the oracle).\n"
     )?;
     writeln!(

@@ -3,11 +3,12 @@
 //!
 //! Shape tables are designed in the frame of their *frame shear* (see [`frame_shear`]) — a widened
 //! hairline around the `k1` axis, a double wedge over the subject's shear range taken relative to it —
-//! and moved at use by the oracle's shear with the seam-free (transported) shear, which carries a
+//! and moved at use by the subject's shear ([`super::Subject::shear`]: the oracle's, or a double-wedge
+//! pixel's range midpoint) with the seam-free (transported) shear, which carries a
 //! pattern direction of slope `a` to slope `s + a`. One table then serves every depth, and the pattern
 //! never wraps across the pixel boundary (the seam that defeats the wrap-around shear, DESIGN §5). A
 //! variance table is designed for the integrand family and shear its file names, built once per N,
-//! and moved by each subject's oracle shear (see [`moved`]).
+//! and moved by each subject's shear (see [`moved`]).
 
 use super::config::CompareConfig;
 use crate::error::{Error, Result};
@@ -138,7 +139,7 @@ impl TableCache {
         }
     }
 
-    /// The sampler of `target` at `n` points for a subject with oracle shear `shear` and shear range
+    /// The sampler of `target` at `n` points for a subject with shear `shear` ([`super::Subject::shear`]) and shear range
     /// `range`, and the seconds its table took to optimize (when it was built, cached or not). The
     /// table is moved by `shear`, or not at all (see [`moved`]).
     pub fn sampler(

@@ -99,13 +99,17 @@ pub fn tone_map_log(p: f64) -> u8 {
     (((l - lo) / (hi - lo)).clamp(0.0, 1.0) * 255.0).round() as u8
 }
 
-/// Writes a spectrum as PNG (log tone map, largest `k2` on top), scaled up to at least 256 pixels.
+/// Smallest side of a point set's spectrum PNG; smaller grids are scaled up by an integer factor.
+pub const SPECTRUM_PNG_MIN_SIDE: usize = 256;
+
+/// Writes a spectrum as PNG (log tone map, largest `k2` on top), scaled up by the smallest integer
+/// factor that makes it at least [`SPECTRUM_PNG_MIN_SIDE`] pixels (`--res 100`: 300 pixels).
 pub fn write_spectrum_png(path: &Path, values: &[f64], res: usize) -> Result<()> {
     let grey: Vec<u8> = spectrum_image_rows(values, res)
         .into_iter()
         .map(tone_map_log)
         .collect();
-    let (side, pixels) = upscaled(&grey, res, 256);
+    let (side, pixels) = upscaled(&grey, res, SPECTRUM_PNG_MIN_SIDE);
     write_png(path, side, side, 1, &pixels)
 }
 

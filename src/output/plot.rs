@@ -516,7 +516,7 @@ pub fn wrap(text: &str, size: u32, width: u32) -> Vec<String> {
 }
 
 /// Draws `text` at `size` px in `colour` on `area`, its top left (or top centre, with `centred`) at
-/// `(x, y)`, each glyph where the font places it (see [`GLYPHS`]).
+/// `(x, y)`, each glyph where the font places it (its left side bearing, as `ab_glyph` reads it).
 pub fn draw_text<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     text: &str,

@@ -375,8 +375,8 @@ enum Direction {
 /// Writes an axis's tick labels.
 type Labels = dyn Fn(&f64) -> String;
 
-/// The vertical axis of every plot: log, with its own key (labelled) and light points.
-type YAxis = plotters::coord::combinators::WithKeyPoints<LogCoord<f64>>;
+/// A log axis with its own key (labelled) and light points: every vertical axis, and a log horizontal one.
+type LogAxis = plotters::coord::combinators::WithKeyPoints<LogCoord<f64>>;
 
 /// Where a log axis from `lo` to `hi` (`0 < lo < hi`) `pixels` long puts its labels: the first of
 /// powers of two (with `powers_of_two`, for a horizontal axis of counts such as N, `lo ≥ 1`), 1-2-5 in each decade, 1 to 9 in each decade (for
@@ -431,6 +431,24 @@ fn log_ticks(lo: f64, hi: f64, pixels: f64, direction: Direction, powers_of_two:
         .or_else(|| candidates.iter().rev().find(|t| !t.is_empty()))
         .cloned()
         .unwrap_or_default()
+}
+
+/// A log axis from `lo` to `hi`, `pixels` long: labelled at [`log_ticks`], with the grid lines of
+/// [`minor_ticks`], and the writer of its labels ([`axis_labels`]).
+fn log_axis(
+    lo: f64,
+    hi: f64,
+    pixels: f64,
+    direction: Direction,
+    powers_of_two: bool,
+) -> (LogAxis, Box<Labels>) {
+    let ticks = log_ticks(lo, hi, pixels, direction, powers_of_two);
+    let labels = axis_labels(&ticks);
+    let axis = (lo..hi)
+        .log_scale()
+        .with_key_points(ticks)
+        .with_light_points(minor_ticks(lo, hi, pixels));
+    (axis, labels)
 }
 
 /// The unlabelled grid lines of a log axis from `lo` to `hi` `pixels` long: 1 to 9 in each decade
@@ -637,21 +655,11 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
         // The axes' own height less the title, the margins and the horizontal axis's label area.
         let y_pixels =
             f64::from(plot.height) - f64::from(title_band - 8 + 2 * MARGIN + X_LABEL_AREA);
-        let y_ticks = log_ticks(y0, y1, y_pixels, Direction::Vertical, false);
-        let y_label = axis_labels(&y_ticks);
-        let y_axis = (y0..y1)
-            .log_scale()
-            .with_key_points(y_ticks)
-            .with_light_points(minor_ticks(y0, y1, y_pixels));
+        let (y_axis, y_label) = log_axis(y0, y1, y_pixels, Direction::Vertical, false);
         if x_log {
             // The axes' own width less the margins and the vertical axis's label area.
             let x_pixels = f64::from(plot.width) - f64::from(2 * MARGIN + Y_LABEL_AREA);
-            let x_ticks = log_ticks(x0, x1, x_pixels, Direction::Horizontal, true);
-            let x_label = axis_labels(&x_ticks);
-            let x_axis = (x0..x1)
-                .log_scale()
-                .with_key_points(x_ticks)
-                .with_light_points(minor_ticks(x0, x1, x_pixels));
+            let (x_axis, x_label) = log_axis(x0, x1, x_pixels, Direction::Horizontal, true);
             let chart = builder
                 .build_cartesian_2d(x_axis, y_axis)
                 .map_err(|e| plot_error(path, e))?;
@@ -715,7 +723,7 @@ fn draw_legend<'a>(
 /// `x_label` and `y_label` writing the axes' labels; `y0` is the bottom of the vertical axis (where an
 /// error bar that would cross 0 ends).
 fn draw<'a, X>(
-    mut chart: ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, YAxis>>,
+    mut chart: ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, LogAxis>>,
     plot: &LogLogPlot,
     path: &Path,
     y0: f64,

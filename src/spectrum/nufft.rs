@@ -23,7 +23,9 @@
 //! The kernel is evaluated per point as `2w` values of fitted polynomials (Horner with fused
 //! multiply-adds, degree chosen at planning time until the measured fit error is below the tolerance
 //! scaled by the deconvolution's band-edge gain), then `w²` fused multiply-adds into a padded grid
-//! whose margins are folded back once per transform.
+//! whose margins are folded back once per transform. On CPUs with AVX-512 each point's `w` values per
+//! dimension are one or two 8-lane vectors, the same operations in the same order as the portable
+//! code, so the grid has the same bits on every CPU.
 //!
 //! Frequencies follow the grid convention of [`crate::spectrum`]: entry `i * K + j` holds
 //! `k1 = j − K/2` (first coordinate) and `k2 = i − K/2` (second coordinate). Coordinates are periods of
@@ -143,6 +145,8 @@ const GRIDS: [(f64, f64, usize); 3] = [(1.25, 340.0, 16), (1.5, 460.0, 14), (2.0
 const BLOCK: usize = 8;
 /// Largest kernel width (grid points per dimension).
 const MAX_WIDTH: usize = 16;
+/// Kernel values per point and dimension in the AVX-512 spreading path: two vectors of 8 `f64`.
+const LANES: usize = 16;
 
 /// A reusable plan for 2D type-1 and type-2 NUFFTs on a `res × res` frequency grid with tolerance `eps`.
 ///
@@ -182,6 +186,8 @@ struct Grid {
     corr: Vec<f64>,
     /// Piecewise-polynomial kernel (see `fit_kernel`); empty when the kernel is evaluated directly.
     coef: Vec<f64>,
+    /// `coef` with each degree's row padded with zeros to `LANES` entries, for the AVX-512 path.
+    coef_lanes: Vec<f64>,
     r2c: Arc<dyn RealToComplex<f64>>,
     fwd: Arc<dyn Fft<f64>>,
     inv: Arc<dyn Fft<f64>>,
@@ -397,6 +403,7 @@ impl Grid {
             beta,
             corr: Vec::new(),
             coef: Vec::new(),
+            coef_lanes: Vec::new(),
             r2c: RealFftPlanner::<f64>::new().plan_fft_forward(n),
             fwd: FftPlanner::new().plan_fft_forward(n),
             inv: FftPlanner::new().plan_fft_inverse(n),
@@ -410,6 +417,10 @@ impl Grid {
         let amplification = grid.corr[res / 2] / grid.corr[0];
         let target = (tol / (10.0 * amplification)).max((-beta).exp()).max(1e-14);
         if let Some((_, coef)) = grid.fit_kernel(target) {
+            grid.coef_lanes = coef
+                .chunks_exact(w)
+                .flat_map(|row| (0..LANES).map(|l| row.get(l).copied().unwrap_or(0.0)))
+                .collect();
             grid.coef = coef;
         }
         Some(grid)
@@ -581,6 +592,12 @@ impl Grid {
         grid: &mut [f64],
     ) {
         #[cfg(target_arch = "x86_64")]
+        if !self.coef_lanes.is_empty() && std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F, checked just above.
+            unsafe { self.spread_w_avx512::<W>(points, weight, grid) };
+            return;
+        }
+        #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
             // SAFETY: the CPU supports AVX2 and FMA, checked just above.
             unsafe { self.spread_w_avx2::<W>(points, weight, grid) };
@@ -598,6 +615,86 @@ impl Grid {
         grid: &mut [f64],
     ) {
         self.spread_w_body::<W>(points, weight, grid);
+    }
+
+    /// [`Grid::spread_w_body`] written with AVX-512 intrinsics: each dimension's `W` kernel values
+    /// are one or two 8-lane vectors (rows of `coef_lanes`), so a Horner step is one or two fused
+    /// multiply-adds, and a grid row of `W` values one or two masked fused multiply-adds. Each value
+    /// goes through the same IEEE operations in the same order as in the body (lanes beyond `W` are
+    /// computed on zero coefficients and never stored), so the grid has the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn spread_w_avx512<const W: usize>(
+        &self,
+        points: &[[f64; 2]],
+        weight: &impl Fn(usize) -> f64,
+        grid: &mut [f64],
+    ) {
+        use std::arch::x86_64::*;
+        let side = self.n + W;
+        let two_vectors = W > 8;
+        let lo_mask: __mmask8 = if W >= 8 { 0xff } else { (1u8 << W) - 1 };
+        let hi_mask: __mmask8 = if two_vectors {
+            ((1u16 << (W - 8)) - 1) as u8
+        } else {
+            0
+        };
+        let (lead, rows) = self.coef_lanes.split_at(LANES);
+        let load = |c: &[f64]| -> (__m512d, __m512d) {
+            // SAFETY: `c` holds LANES = 16 values.
+            unsafe {
+                (
+                    _mm512_loadu_pd(c.as_ptr()),
+                    _mm512_loadu_pd(c[8..].as_ptr()),
+                )
+            }
+        };
+        let (lead_lo, lead_hi) = load(lead);
+        let mut kx = [0.0; LANES];
+        for (j, p) in points.iter().enumerate() {
+            check_finite(j, p);
+            let (ax, sx) = self.node::<W>(p[0]);
+            let (ay, sy) = self.node::<W>(p[1]);
+            // The same u = 2s − 1 as in `values` (a product, then a difference).
+            let ux = _mm512_set1_pd(2.0 * sx - 1.0);
+            let uy = _mm512_set1_pd(2.0 * sy - 1.0);
+            let (mut x_lo, mut x_hi, mut y_lo, mut y_hi) = (lead_lo, lead_hi, lead_lo, lead_hi);
+            for row in rows.chunks_exact(LANES) {
+                let (c_lo, c_hi) = load(row);
+                x_lo = _mm512_fmadd_pd(x_lo, ux, c_lo);
+                y_lo = _mm512_fmadd_pd(y_lo, uy, c_lo);
+                if two_vectors {
+                    x_hi = _mm512_fmadd_pd(x_hi, ux, c_hi);
+                    y_hi = _mm512_fmadd_pd(y_hi, uy, c_hi);
+                }
+            }
+            // SAFETY: kx holds 16 values.
+            unsafe {
+                _mm512_storeu_pd(kx.as_mut_ptr(), x_lo);
+                _mm512_storeu_pd(kx[8..].as_mut_ptr(), x_hi);
+            }
+            let c = weight(j);
+            // The block of rows ax.., columns ay.. that the body writes (checked once per point).
+            let first = ax * side + ay;
+            assert!(
+                first + (W - 1) * side + W <= grid.len(),
+                "kernel block inside the grid"
+            );
+            for (l1, &vx) in kx[..W].iter().enumerate() {
+                let cx = _mm512_set1_pd(c * vx);
+                // SAFETY: the masked loads and stores touch entries first + l1·side + (0..W), inside
+                // the grid (asserted above); masked-off lanes are not accessed.
+                unsafe {
+                    let at = grid.as_mut_ptr().add(first + l1 * side);
+                    let g = _mm512_maskz_loadu_pd(lo_mask, at);
+                    _mm512_mask_storeu_pd(at, lo_mask, _mm512_fmadd_pd(cx, y_lo, g));
+                    if two_vectors {
+                        let g = _mm512_maskz_loadu_pd(hi_mask, at.add(8));
+                        _mm512_mask_storeu_pd(at.add(8), hi_mask, _mm512_fmadd_pd(cx, y_hi, g));
+                    }
+                }
+            }
+        }
     }
 
     #[inline(always)]
@@ -916,6 +1013,52 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_avx512_spreading_has_the_bits_of_the_portable_one() {
+        if !std::is_x86_feature_detected!("avx512f") {
+            eprintln!("no AVX-512F on this CPU: nothing to compare");
+            return;
+        }
+        let mut rng = crate::rng::stream(53, 0);
+        let mut pts: Vec<[f64; 2]> = (0..500)
+            .map(|_| [rng.random::<f64>(), rng.random::<f64>()])
+            .collect();
+        // Points on grid nodes, at the torus' seam and outside [0, 1).
+        pts.extend([[0.0, 0.0], [1.0 - 1e-17, 0.5], [-0.25, 3.75], [0.5, 0.5]]);
+        let weights: Vec<f64> = (0..pts.len()).map(|_| rng.random::<f64>() - 0.3).collect();
+        let mut widths = Vec::new();
+        for eps in [1e-1, 3e-2, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-8, 1e-10, 1e-12] {
+            for g in Nufft2d::new(40, eps).unwrap().grids {
+                if g.coef_lanes.is_empty() || widths.contains(&g.w) {
+                    continue;
+                }
+                widths.push(g.w);
+                let side = g.n + g.w;
+                let (mut portable, mut wide) = (vec![0.0; side * side], vec![0.0; side * side]);
+                with_width!(g.w, W => {
+                    g.spread_w_body::<W>(&pts, &|j| weights[j], &mut portable);
+                    // SAFETY: AVX-512F is available (checked above).
+                    unsafe { g.spread_w_avx512::<W>(&pts, &|j| weights[j], &mut wide) };
+                });
+                assert!(
+                    portable
+                        .iter()
+                        .zip(&wide)
+                        .all(|(a, b)| a.to_bits() == b.to_bits()),
+                    "w = {}: the two paths differ",
+                    g.w
+                );
+            }
+        }
+        widths.sort();
+        // Both the one-vector (w ≤ 8) and the two-vector (w > 8) layouts, up to the widest kernel.
+        assert!(
+            widths.iter().any(|&w| w <= 8) && widths.contains(&16),
+            "{widths:?}"
+        );
     }
 
     #[test]

@@ -10,8 +10,8 @@ use std::path::PathBuf;
 #[derive(Clone, Debug, clap::Args)]
 pub struct ConvergeArgs {
     /// Samplers, comma-separated (see `anisospec samplers`), e.g. random,jittered,nrooks or
-    /// table:PATH (optimized sets), or lattice:Z1:Z2[:Z3:Z4] (a rank-1 lattice with that generating
-    /// vector).
+    /// table:PATH (optimized sets), or lattice:Z1:Z2 (2D) or lattice:Z1:Z2:Z3:Z4 (4D) (a rank-1
+    /// lattice with that generating vector).
     #[arg(long, value_delimiter = ',', required = true)]
     pub sampler: Vec<String>,
     /// Integrand, NAME:key=value,... (see `anisospec integrands`), e.g. disc:r=0.3.

@@ -11,7 +11,8 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct SampleArgs {
     /// Sampler name (see `anisospec samplers`), e.g. mj, sobol, padded-cmj, oa, or table:PATH
-    /// (optimized sets), or lattice:Z1:Z2[:Z3:Z4] (a rank-1 lattice with that generating vector).
+    /// (optimized sets), or lattice:Z1:Z2 (2D) or lattice:Z1:Z2:Z3:Z4 (4D) (a rank-1 lattice with
+    /// that generating vector).
     #[arg(long)]
     pub sampler: String,
     /// Dimensions of each point: 2 (x,y) or 4 (x,y,u,v).

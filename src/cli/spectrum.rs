@@ -18,7 +18,8 @@ use std::path::{Path, PathBuf};
 #[command(group = clap::ArgGroup::new("source").required(true).args(["sampler", "input"]))]
 pub struct SpectrumArgs {
     /// Sampler to draw the realizations from (see `anisospec samplers`), or table:PATH (optimized
-    /// sets), or lattice:Z1:Z2[:Z3:Z4] (a rank-1 lattice with that generating vector).
+    /// sets), or lattice:Z1:Z2 (2D) or lattice:Z1:Z2:Z3:Z4 (4D) (a rank-1 lattice with that
+    /// generating vector).
     #[arg(long)]
     pub sampler: Option<String>,
     /// Point file (.npy [sets, N, D] or .txt): each set is one realization. Its N and D are read from

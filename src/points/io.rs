@@ -38,7 +38,7 @@ const MAX_LINE_BYTES: u64 = 1 << 16;
 /// Reads a point set from `.npy` or text, checking every value (see [`PointSets::new`]). A file
 /// holding more than [`super::MAX_COORDINATES`] coordinates is refused before it is read whole: an
 /// npy file by its size, a text file as soon as the count passes the limit (or a line runs past
-/// [`MAX_LINE_BYTES`]).
+/// 64 KiB).
 pub fn read_points(path: &Path) -> Result<PointSets> {
     let format = Format::of(path)?;
     let file = std::fs::File::open(path).map_err(|e| Error::read_input(path, e))?;

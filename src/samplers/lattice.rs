@@ -13,7 +13,7 @@
 //!   `(1, z_j / z_i mod N)`), then the largest sum of their squares. For N = 2, 3, 4, 6, 8, 12 and 24
 //!   every `a` has `a² ≡ 1 (mod N)`, so `u` repeats `x` and `v` repeats `y`.
 //!
-//! [`GivenLattice`] (sampler `lattice:Z1:Z2[:Z3:Z4]`) takes a generating vector from the user instead.
+//! [`GivenLattice`] (sampler `lattice:Z1:Z2` or `lattice:Z1:Z2:Z3:Z4`) takes a generating vector from the user instead.
 
 use super::Sampler;
 use crate::error::{Error, Result};
@@ -154,7 +154,7 @@ impl Sampler for Lattice {
 }
 
 /// A randomly shifted rank-1 lattice with a generating vector the user gives (sampler
-/// `lattice:Z1:Z2[:Z3:Z4]`), e.g. a published one: the points `frac(i z / N + shift)`, each `z_d`
+/// `lattice:Z1:Z2` or `lattice:Z1:Z2:Z3:Z4`), e.g. a published one: the points `frac(i z / N + shift)`, each `z_d`
 /// taken mod N. Every entry must be coprime to N, which keeps each coordinate N-stratified: an entry
 /// sharing the factor `d` with N gives only N / d distinct values in its coordinate (0 gives one).
 #[derive(Clone, Debug)]

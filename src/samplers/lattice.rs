@@ -13,7 +13,8 @@
 //!   `(1, z_j / z_i mod N)`), then the largest sum of their squares. For N = 2, 3, 4, 6, 8, 12 and 24
 //!   every `a` has `a² ≡ 1 (mod N)`, so `u` repeats `x` and `v` repeats `y`.
 //!
-//! [`GivenLattice`] (sampler `lattice:Z1:Z2` or `lattice:Z1:Z2:Z3:Z4`) takes a generating vector from the user instead.
+//! [`GivenLattice`] (sampler `lattice:Z1:Z2` or `lattice:Z1:Z2:Z3:Z4`) takes a generating vector
+//! from the user instead.
 
 use super::Sampler;
 use crate::error::{Error, Result};

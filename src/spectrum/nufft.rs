@@ -18,13 +18,14 @@
 //! Implementation notes: the point weights of type 1 are real, so the fine grid is real. The grid is
 //! stored x-major (rows follow the first coordinate). Row stage: two real rows make one complex line
 //! `a + i b`, 16 such lines go through one batched complex FFT (rustfft) along y, and Hermitian
-//! symmetry separates them again, `A(k) = (Z(k) + conj Z(−k))/2`, `B(k) = (Z(k) − conj Z(−k))/(2i)`;
+//! symmetry separates them again, `â(k) = (Z(k) + conj Z(−k))/2`, `b̂(k) = (Z(k) − conj Z(−k))/(2i)`;
 //! the separation writes only the kept `k2 = 0 ..= K/2`, transposed into one contiguous line over x
 //! per `k2` (measured at n = 320: 0.10 ms, against 0.12 ms for one realfft real-to-complex call per
 //! row and the same transpose). Column stage: one batched complex FFT of the `K/2 + 1` lines along
 //! x; `k2 < 0` comes from Hermitian symmetry. Each output row is then a contiguous run of one
 //! transformed line. The power spectrum needs no complex deconvolution, `P = |B|² corr(k1)²
-//! corr(k2)² / N`, and fills row `−k2` from row `k2` (`P(k) = P(−k)`) in the same pass.
+//! corr(k2)² / N` with `B` the transformed fine grid, and fills row `−k2` from row `k2`
+//! (`P(k) = P(−k)`) in the same pass.
 //! The kernel is evaluated per point as `2w` values of fitted polynomials (Horner with fused
 //! multiply-adds, degree chosen at planning time until the measured fit error is below the tolerance
 //! scaled by the deconvolution's band-edge gain), then `w²` fused multiply-adds into a padded grid
@@ -747,7 +748,7 @@ impl Grid {
     /// [`crate::spectrum`], every entry written), where `inv_n = 1/N`.
     ///
     /// Only the modulus matters, so each bin takes one real factor instead of a complex
-    /// deconvolution: `P = |B|² · (corr[|k1|]² · corr[|k2|]² / N)`. Line `k2 ≥ 0` fills row `k2` and,
+    /// deconvolution: `P = |B|² · (corr[|k1|]² · corr[|k2|]² / N)` with `B` the transformed fine grid. Line `k2 ≥ 0` fills row `k2` and,
     /// by `P(k) = P(−k)` for real weights, row `−k2` in the same pass (a copy of row `k2` reversed,
     /// while it is in cache).
     fn power_into(&self, points: &[[f64; 2]], inv_n: f64, out: &mut [f64]) {
@@ -820,8 +821,8 @@ impl Grid {
     /// (long enough for `fwd` in place) and a free work vector.
     ///
     /// Row stage: the grid is real, so two rows `a`, `b` go through one complex FFT as `z = a + i b`
-    /// and are separated by Hermitian symmetry, `A(k) = (Z(k) + conj Z(−k)) / 2` and
-    /// `B(k) = (Z(k) − conj Z(−k)) / (2i)` (exact halvings). [`BLOCK`] rows (`BLOCK / 2` packed lines)
+    /// and are separated by Hermitian symmetry, `â(k) = (Z(k) + conj Z(−k)) / 2` and
+    /// `b̂(k) = (Z(k) − conj Z(−k)) / (2i)` (exact halvings). [`BLOCK`] rows (`BLOCK / 2` packed lines)
     /// go through one batched rustfft call, and their separation is fused with the transpose into
     /// the lines, which then receive `BLOCK` contiguous values per `k2`. Measured on the development
     /// machine (n = 320, K = 256): 0.10 ms for the stage, against 0.12 ms for one realfft

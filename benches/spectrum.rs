@@ -1,7 +1,8 @@
 //! Spectrum benchmarks (DESIGN §3).
 //!
 //! (a) `expected_spectrum`: the expected power spectrum of R = 100 random sets, N = 4096, K = 256,
-//!     eps = 1e-6, on ONE thread (100 × `power()`, summed).
+//!     eps = 1e-6, on ONE thread: 100 × `power()`, summed, and the library's
+//!     `expected::expected_spectrum` (sums of P and P², standard errors) of the same sets.
 //! (b) `exact_one_realization`: one exact DFT power spectrum of the same size (N = 4096, K = 256) on
 //!     one thread: the reference of the "1000× faster than exact" target of issue 2.
 //! (c) `exact_vs_nufft`: exact DFT against NUFFT (eps = 1e-6) for N = 1024, K = 64, one thread.
@@ -43,7 +44,7 @@
 
 use anisospec::rng::stream;
 use anisospec::spectrum::nufft::{contract_error, Nufft2d};
-use anisospec::spectrum::{power, Method};
+use anisospec::spectrum::{expected, power, Method};
 use criterion::{criterion_group, criterion_main, Criterion};
 use rand::Rng as _;
 use std::hint::black_box;
@@ -65,7 +66,7 @@ fn one_thread() -> rayon::ThreadPool {
 
 fn expected_spectrum(c: &mut Criterion) {
     let (n, res, reps) = (4096, 256, 100);
-    let sets: Vec<Vec<[f64; 2]>> = (0..reps).map(|r| random_set(n, 1, r)).collect();
+    let sets: Vec<Vec<[f64; 2]>> = (0..reps).map(|r| random_set(n, 1, r as u64)).collect();
     let method = Method::nufft(1e-6).unwrap();
     let pool = one_thread();
     let mut g = c.benchmark_group("expected_spectrum");
@@ -80,6 +81,20 @@ fn expected_spectrum(c: &mut Criterion) {
                     }
                 }
                 black_box(acc)
+            })
+        })
+    });
+    // The library's expected spectrum of the same sets (sums of P and P², standard errors).
+    g.bench_function("library_N4096_K256_R100_eps1e-6_1thread", |b| {
+        b.iter(|| {
+            pool.install(|| {
+                black_box(expected::expected_spectrum(
+                    reps,
+                    res,
+                    method,
+                    "bench",
+                    |r| sets[r].clone(),
+                ))
             })
         })
     });

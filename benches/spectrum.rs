@@ -41,6 +41,15 @@
 //! (two real rows packed per complex line, 16 lines per rustfft call: 0.063 ms of FFTs, the rest
 //! packing and the separation fused with the transpose); column FFTs, deconvolution and power
 //! 0.051 + 0.023 ms plus the mirroring pass → 0.075 ms; zeroing 0.008 and spreading 0.155 ms unchanged.
+//!
+//! Power rows and accumulated sums (same machine, 2026-11-23, load 1.1–2.8; old and new bench
+//! binaries alternated): the library's `expected_spectrum` (sums of P and P²) 48.6–49.9 ms before,
+//! 36.2–38.3 ms after (≈ 0.49 → 0.37 ms per realization): `Nufft2d::accumulate_power` adds each
+//! row of P into the sums while in cache instead of writing the K² spectrum out and reading it back
+//! (≈ 6 %), and the partial sums are reused across batches, 4 chunks per thread, instead of fresh
+//! 16 MB per batch that page-faulted (≈ 30 % of the run in the kernel before). `power()` summed by
+//! hand: 31.7–32.6 ms before, 31.2–33.4 ms after, i.e. unchanged at ≈ 0.32 ms per realization (the
+//! vectorized reversed copy for k2 < 0 saves about what the row copy out of the work run costs).
 
 use anisospec::rng::stream;
 use anisospec::spectrum::nufft::{contract_error, Nufft2d};

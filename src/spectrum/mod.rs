@@ -141,3 +141,31 @@ pub fn power(points: &[[f64; 2]], res: usize, method: Method) -> Vec<f64> {
         Method::Nufft { eps } => plan_or_panic(res, eps).power(points),
     }
 }
+
+/// Adds the power spectrum of `points` to `sum` and its square to `sum_sq` (`res²` values each):
+/// `sum[i] += P[i]` and `sum_sq[i] += P[i]²` with `P` that of [`power`], bit for bit. With the NUFFT
+/// the rows of `P` go straight into the sums ([`Nufft2d::accumulate_power`]), without a `res²`
+/// spectrum written and read back. Panics as [`power`] does, and if a sum does not hold `res²`
+/// values.
+pub fn accumulate_power(
+    points: &[[f64; 2]],
+    res: usize,
+    method: Method,
+    sum: &mut [f64],
+    sum_sq: &mut [f64],
+) {
+    match method {
+        Method::Exact => {
+            assert!(
+                sum.len() == res * res && sum_sq.len() == res * res,
+                "accumulate_power needs sums of res² = {} values",
+                res * res
+            );
+            for ((s, q), p) in sum.iter_mut().zip(sum_sq).zip(power(points, res, method)) {
+                *s += p;
+                *q += p * p;
+            }
+        }
+        Method::Nufft { eps } => plan_or_panic(res, eps).accumulate_power(points, sum, sum_sq),
+    }
+}

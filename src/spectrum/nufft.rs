@@ -204,6 +204,8 @@ struct Scratch {
     cplx: Vec<Complex64>,
     row: Vec<Complex64>,
     fft: Vec<Complex64>,
+    /// Real work vector of the power path (see `Grid::power_rows`).
+    power: Vec<f64>,
 }
 
 thread_local! {
@@ -214,6 +216,24 @@ thread_local! {
 fn reset<T: Copy>(v: &mut Vec<T>, len: usize, value: T) {
     v.clear();
     v.resize(len, value);
+}
+
+/// Writes `src` reversed into `dst` (same length), four values at a time so that the loop compiles to
+/// vector loads, shuffles and stores (an element-wise reversed copy stays scalar).
+fn copy_reversed(dst: &mut [f64], src: &[f64]) {
+    assert_eq!(dst.len(), src.len());
+    let mut d = dst.chunks_exact_mut(4);
+    let mut s = src.rchunks_exact(4);
+    for (d, s) in (&mut d).zip(&mut s) {
+        d.copy_from_slice(&[s[3], s[2], s[1], s[0]]);
+    }
+    for (d, s) in d
+        .into_remainder()
+        .iter_mut()
+        .zip(s.remainder().iter().rev())
+    {
+        *d = *s;
+    }
 }
 
 /// Resizes `v` to `len`, keeping old contents: for buffers that are then overwritten entirely.
@@ -336,14 +356,43 @@ impl Nufft2d {
         self.power_on(self.pick(points.len()), points)
     }
 
+    /// Adds the power spectrum of `points` to `sum` and its square to `sum_sq` (`K²` values each,
+    /// layout of [`crate::spectrum`]): `sum[i] += P[i]` and `sum_sq[i] += P[i]²` with `P` bit for bit
+    /// that of [`Nufft2d::power`], for sums over realizations (see [`crate::spectrum::expected`]).
+    /// Each row of `P` goes into the sums while it is in cache, where [`Nufft2d::power`] followed by
+    /// a summing pass writes the `K²` spectrum out and reads it back. An empty set adds nothing
+    /// (`P = 0`).
+    ///
+    /// Panics if `sum` or `sum_sq` does not hold `K²` values.
+    pub fn accumulate_power(&self, points: &[[f64; 2]], sum: &mut [f64], sum_sq: &mut [f64]) {
+        let k = self.res;
+        assert!(
+            sum.len() == k * k && sum_sq.len() == k * k,
+            "accumulate_power needs sums of K² = {} values",
+            k * k
+        );
+        if points.is_empty() {
+            return;
+        }
+        let grid = self.pick(points.len());
+        grid.power_rows(points, 1.0 / points.len() as f64, |i, p| {
+            let rows = i * k..(i + 1) * k;
+            for ((s, q), p) in sum[rows.clone()].iter_mut().zip(&mut sum_sq[rows]).zip(p) {
+                *s += p;
+                *q += p * p;
+            }
+        });
+    }
+
     /// [`Nufft2d::power`] on a given grid.
     fn power_on(&self, grid: &Grid, points: &[[f64; 2]]) -> Vec<f64> {
         let k = self.res;
         let mut out = vec![0.0; k * k];
-        if points.is_empty() {
-            return out;
+        if !points.is_empty() {
+            grid.power_rows(points, 1.0 / points.len() as f64, |i, p| {
+                out[i * k..(i + 1) * k].copy_from_slice(p)
+            });
         }
-        grid.power_into(points, 1.0 / points.len() as f64, &mut out);
         out
     }
 
@@ -792,7 +841,7 @@ impl Grid {
     ) {
         let (n, k) = (self.n, self.res);
         let half = k / 2;
-        self.type1_lines(points, weight, |lines, fft, row| {
+        self.type1_lines(points, weight, |lines, fft, row, _| {
             // Complex FFT along x for each kept k2 (batched: the buffer is K/2 + 1 lines of n).
             self.fwd.process_with_scratch(lines, fft);
             // Deconvolve and emit row by row: line k2 ≥ 0 holds B(k1, k2) at k1 mod n; a row with
@@ -841,72 +890,52 @@ impl Grid {
         });
     }
 
-    /// The power spectrum `P = |F|² / N` of type 1 with unit weights into `out` (`K × K`, layout of
-    /// [`crate::spectrum`], every entry written), where `inv_n = 1/N`.
+    /// The power spectrum `P = |F|² / N` of type 1 with unit weights, row by row: `emit(i, P)` gets
+    /// each output row `i` (`k2 = i − K/2`, all `k1`; layout of [`crate::spectrum`]) exactly once, in
+    /// no particular order; `inv_n = 1/N`.
     ///
     /// Only the modulus matters, so each bin takes one real factor instead of a complex
-    /// deconvolution: `P = |B|² · (corr[|k1|]² · corr[|k2|]² / N)` with `B` the transformed fine grid. Line `k2 ≥ 0` fills row `k2` and,
-    /// by `P(k) = P(−k)` for real weights, row `−k2` in the same pass (a copy of row `k2` reversed,
-    /// while it is in cache).
-    fn power_into(&self, points: &[[f64; 2]], inv_n: f64, out: &mut [f64]) {
+    /// deconvolution: `P = |B|² · (corr[|k1|]² · corr[|k2|]² / N)` with `B` the transformed fine grid
+    /// (the squares `corr[|k1|]²` are tabulated once per call, in row order, so that the loops run
+    /// forward and vectorize). Line `k2 = a ≥ 0` gives the run `P(k1, a)`, `k1 = −K/2 ..= K/2` (one
+    /// more than a row): its first `K` values are row `a`, and by `P(k) = P(−k)` for real weights
+    /// the run reversed, made while it is in cache, is row `−a`.
+    fn power_rows(&self, points: &[[f64; 2]], inv_n: f64, mut emit: impl FnMut(usize, &[f64])) {
         let (n, k) = (self.n, self.res);
         let half = k / 2;
         self.type1_lines(
             points,
             |_| 1.0,
-            |lines, fft, _| {
+            |lines, fft, _, work| {
                 // Complex FFT along x for each kept k2 (batched: K/2 + 1 lines of n).
                 self.fwd.process_with_scratch(lines, fft);
+                fit(work, 3 * k + 2);
+                let (fac, rest) = work.split_at_mut(k + 1);
+                let (run, rev) = rest.split_at_mut(k + 1);
+                // fac[j] = corr[|k1|]² at k1 = j − K/2, for j = 0 ..= K.
+                for (j, f) in fac.iter_mut().enumerate() {
+                    let c = self.corr[j.abs_diff(half)];
+                    *f = c * c;
+                }
                 for a in 0..=half {
                     let line = &lines[a * n..(a + 1) * n];
                     let r = self.corr[a] * self.corr[a] * inv_n;
-                    let (plus, minus) = (half + a, half - a);
-                    if plus < k {
-                        // Row k2 = a: j < half reads k1 = j − half at index n − half + j.
-                        let dst = &mut out[plus * k..(plus + 1) * k];
-                        let (lo, hi) = dst.split_at_mut(half);
-                        for ((o, f), c) in lo
-                            .iter_mut()
-                            .zip(&line[n - half..])
-                            .zip(self.corr[1..=half].iter().rev())
-                        {
-                            *o = f.norm_sqr() * (c * c * r);
-                        }
-                        for ((o, f), c) in hi.iter_mut().zip(&line[..half]).zip(&self.corr[..half])
-                        {
-                            *o = f.norm_sqr() * (c * c * r);
-                        }
-                        if a > 0 {
-                            // Row k2 = −a: entry j ≥ 1 equals entry K − j of row a; entry 0
-                            // (k1 = −K/2) is P(K/2, a), outside row a.
-                            let (lo, hi) = out.split_at_mut(plus * k);
-                            let dst = &mut lo[minus * k..(minus + 1) * k];
-                            let c = self.corr[half];
-                            dst[0] = line[half].norm_sqr() * (c * c * r);
-                            for (d, s) in dst[1..].iter_mut().zip(hi[1..k].iter().rev()) {
-                                *d = *s;
-                            }
-                        }
-                    } else {
-                        // Row k2 = −K/2 (a = K/2, whose row +K/2 is not in the grid):
-                        // P(k1, −K/2) = P(−k1, K/2), with −k1 = half − j at index (half − j) mod n.
-                        let dst = &mut out[..k];
-                        let (lo, hi) = dst.split_at_mut(half);
-                        for ((o, f), c) in lo
-                            .iter_mut()
-                            .zip(line[1..=half].iter().rev())
-                            .zip(self.corr[1..=half].iter().rev())
-                        {
-                            *o = f.norm_sqr() * (c * c * r);
-                        }
-                        hi[0] = line[0].norm_sqr() * (self.corr[0] * self.corr[0] * r);
-                        for ((o, f), c) in hi[1..]
-                            .iter_mut()
-                            .zip(line[n - half + 1..].iter().rev())
-                            .zip(&self.corr[1..half])
-                        {
-                            *o = f.norm_sqr() * (c * c * r);
-                        }
+                    // k1 < 0 is at index n + k1 of the line, k1 ≥ 0 at index k1.
+                    let (lo, hi) = run.split_at_mut(half);
+                    for ((o, f), c) in lo.iter_mut().zip(&line[n - half..]).zip(&fac[..half]) {
+                        *o = f.norm_sqr() * (c * r);
+                    }
+                    for ((o, f), c) in hi.iter_mut().zip(&line[..=half]).zip(&fac[half..]) {
+                        *o = f.norm_sqr() * (c * r);
+                    }
+                    // Row +K/2 is not in the grid; row 0 is its own mirror.
+                    if a < half {
+                        emit(half + a, &run[..k]);
+                    }
+                    if a > 0 {
+                        // P(k1, −a) = P(−k1, a): entry j is run[K − j].
+                        copy_reversed(&mut rev[..k], &run[1..]);
+                        emit(half - a, &rev[..k]);
                     }
                 }
             },
@@ -915,7 +944,7 @@ impl Grid {
 
     /// Spreads the points and runs the row stage, then hands `body` the `K/2 + 1` lines (line `k2`
     /// holds, over x, the transform along y of the grid at `k2`; `n` values each), the FFT scratch
-    /// (long enough for `fwd` in place) and a free work vector.
+    /// (long enough for `fwd` in place) and two free work vectors, complex and real.
     ///
     /// Row stage: the grid is real, so two rows `a`, `b` go through one complex FFT as `z = a + i b`
     /// and are separated by Hermitian symmetry, `â(k) = (Z(k) + conj Z(−k)) / 2` and
@@ -928,7 +957,7 @@ impl Grid {
         &self,
         points: &[[f64; 2]],
         weight: impl Fn(usize) -> f64,
-        body: impl FnOnce(&mut [Complex64], &mut [Complex64], &mut Vec<Complex64>) -> R,
+        body: impl FnOnce(&mut [Complex64], &mut [Complex64], &mut Vec<Complex64>, &mut Vec<f64>) -> R,
     ) -> R {
         let (n, k, off) = (self.n, self.res, self.w / 2);
         let side = n + self.w;
@@ -966,7 +995,7 @@ impl Grid {
                     }
                 }
             }
-            body(&mut s.cplx, &mut s.fft, &mut s.row)
+            body(&mut s.cplx, &mut s.fft, &mut s.row, &mut s.power)
         })
     }
 
@@ -1156,6 +1185,35 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    #[test]
+    fn accumulated_power_has_the_bits_of_power() {
+        // Sums of P and P² over sets (one empty) against the sums of `power`'s output, bit for bit.
+        let mut rng = crate::rng::stream(55, 0);
+        let sets: Vec<Vec<[f64; 2]>> = [150, 0, 90]
+            .iter()
+            .map(|&m| {
+                (0..m)
+                    .map(|_| [rng.random::<f64>(), rng.random::<f64>()])
+                    .collect()
+            })
+            .collect();
+        for res in [2, 6, 50] {
+            let plan = Nufft2d::new(res, 1e-6).unwrap();
+            let (mut sum, mut sum_sq) = (vec![0.0; res * res], vec![0.0; res * res]);
+            let (mut want, mut want_sq) = (sum.clone(), sum_sq.clone());
+            for pts in &sets {
+                plan.accumulate_power(pts, &mut sum, &mut sum_sq);
+                for ((s, q), p) in want.iter_mut().zip(&mut want_sq).zip(plan.power(pts)) {
+                    *s += p;
+                    *q += p * p;
+                }
+            }
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&sum), bits(&want), "K={res}: sums");
+            assert_eq!(bits(&sum_sq), bits(&want_sq), "K={res}: sums of squares");
         }
     }
 

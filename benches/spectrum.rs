@@ -30,8 +30,19 @@
 //!
 //! On a newer machine of the same kind (AMD EPYC family 26, with 512-bit AVX-512; 2026-11-23, load
 //! 2.7–3.6): `expected_spectrum` 38–41 ms (0.39 ms per realization), one exact realization 251–259 ms,
-//! so ≈ 650×. Spreading compiled for AVX-512F as well (a third `target_feature` path) ran 41–45 ms
-//! against 40–41 ms for the AVX2 path in alternating runs, so it was not kept.
+//! so ≈ 650×. Spreading merely compiled for AVX-512F (a third `target_feature` path of the same
+//! code) ran 41–45 ms against 40–41 ms for the AVX2 path, so it was not kept.
+//!
+//! AVX-512 spreading written with intrinsics (same machine, 2026-11-23, load 1–3; old and new
+//! binaries alternated): one or two 8-lane vectors per kernel row, masked grid updates; spreading
+//! 0.16–0.21 ms → 0.13–0.17 ms per realization. What limits it now: with the kernel values held
+//! constant spreading still takes 0.11–0.12 ms, without the grid updates 0.056 ms, so the `w` masked
+//! read-modify-writes of 2 vectors per point (the grid is 892 KB, about the size of L2) dominate.
+//! Tried and not kept, each measured with its own cost included: two points per Horner loop (more
+//! independent multiply-adds), sorting the points by tiles of 16 × 16 grid cells or by strips of
+//! rows (counting sort), software prefetch of the next point's rows, 64-byte aligned windows (no
+//! split cache lines), 2 MB pages for the grid: none beat the noise (±10 %). A kernel fit 100×
+//! looser lowers the Horner degree only from 10 to 9 at w = 14.
 //!
 //! FFT stages rewritten (same machine, 2026-11-23, load 1.0–3.4 from another build; old and new
 //! binaries alternated): `expected_spectrum` best 36.8 ms before, 33.8 ms after (medians of six
@@ -50,6 +61,14 @@
 //! 16 MB per batch that page-faulted (≈ 30 % of the run in the kernel before). `power()` summed by
 //! hand: 31.7–32.6 ms before, 31.2–33.4 ms after, i.e. unchanged at ≈ 0.32 ms per realization (the
 //! vectorized reversed copy for k2 < 0 saves about what the row copy out of the work run costs).
+//!
+//! All of it together (same machine, 2026-11-23, load 0.6–1.6, one `cargo bench` run):
+//! `expected_spectrum` 31.1–32.1 ms by hand (0.315 ms per realization) and 36.2–36.7 ms through the
+//! library (0.365 ms, with the P² sums); one exact realization 249–251 ms. So the NUFFT is ≈ 795×
+//! faster than the exact DFT per realization (≈ 690× through the library), short of the 1000×
+//! target, and ≈ 10× faster than FINUFFT's 0.33 s for the same 100 realizations. Stage profile of
+//! one `power` call: zeroing 0.007 ms, spreading 0.12–0.13, row stage ≈ 0.095 (FFTs 0.063), column
+//! FFTs ≈ 0.055, power rows ≈ 0.03 ms. 1000× needs ≈ 0.25 ms: the FFTs alone are 0.12 ms of it.
 
 use anisospec::rng::stream;
 use anisospec::spectrum::nufft::{contract_error, Nufft2d};

@@ -66,7 +66,8 @@
 //! `expected_spectrum` 31.1–32.1 ms by hand (0.315 ms per realization) and 36.2–36.7 ms through the
 //! library (0.365 ms, with the P² sums); one exact realization 249–251 ms. So the NUFFT is ≈ 795×
 //! faster than the exact DFT per realization (≈ 690× through the library), short of the 1000×
-//! target, and ≈ 10× faster than FINUFFT's 0.33 s for the same 100 realizations. Stage profile of
+//! target, and ≈ 10× below the 0.33 s the issue quotes for FINUFFT 2.5.1 on the same job (not run
+//! here). Stage profile of
 //! one `power` call: zeroing 0.007 ms, spreading 0.12–0.13, row stage ≈ 0.095 (FFTs 0.063), column
 //! FFTs ≈ 0.055, power rows ≈ 0.03 ms. 1000× needs ≈ 0.25 ms: the FFTs alone are 0.12 ms of it.
 

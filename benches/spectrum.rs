@@ -67,9 +67,9 @@
 //! library (0.365 ms, with the P² sums); one exact realization 249–251 ms. So the NUFFT is ≈ 795×
 //! faster than the exact DFT per realization (≈ 690× through the library), short of the 1000×
 //! target, and ≈ 10× below the 0.33 s the issue quotes for FINUFFT 2.5.1 on the same job (not run
-//! here). Stage profile of
-//! one `power` call: zeroing 0.007 ms, spreading 0.12–0.13, row stage ≈ 0.095 (FFTs 0.063), column
-//! FFTs ≈ 0.055, power rows ≈ 0.03 ms. 1000× needs ≈ 0.25 ms: the FFTs alone are 0.12 ms of it.
+//! here). Stage profile of one `power` call: zeroing 0.007 ms, spreading 0.12–0.13, row stage
+//! ≈ 0.095 (FFTs 0.063), column FFTs ≈ 0.055, power rows ≈ 0.03 ms. 1000× needs ≈ 0.25 ms: the FFTs
+//! alone are 0.12 ms of it.
 
 use anisospec::rng::stream;
 use anisospec::spectrum::nufft::{contract_error, Nufft2d};

@@ -156,8 +156,9 @@ impl Sampler for Lattice {
 
 /// A randomly shifted rank-1 lattice with a generating vector the user gives (sampler
 /// `lattice:Z1:Z2` or `lattice:Z1:Z2:Z3:Z4`), e.g. a published one: the points
-/// `frac(i z / N + shift)`, each `z_d` taken mod N. Every entry must be coprime to N, which keeps each coordinate N-stratified: an entry
-/// sharing the factor `d` with N gives only N / d distinct values in its coordinate (0 gives one).
+/// `frac(i z / N + shift)`, each `z_d` taken mod N. Every entry must be coprime to N, which keeps
+/// each coordinate N-stratified: an entry sharing the factor `d` with N gives only N / d distinct
+/// values in its coordinate (0 gives one).
 #[derive(Clone, Debug)]
 pub struct GivenLattice {
     z: Vec<u64>,

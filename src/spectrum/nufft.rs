@@ -20,8 +20,8 @@
 //! `a + i b`, 16 such lines go through one batched complex FFT (rustfft) along y, and Hermitian
 //! symmetry separates them again, `â(k) = (Z(k) + conj Z(−k))/2`, `b̂(k) = (Z(k) − conj Z(−k))/(2i)`;
 //! the separation writes only the kept `k2 = 0 ..= K/2`, transposed into one contiguous line over x
-//! per `k2` (measured at n = 320: 0.10 ms, against 0.12 ms for one realfft real-to-complex call per
-//! row and the same transpose). Column stage: one batched complex FFT of the `K/2 + 1` lines along
+//! per `k2` (measured at n = 320: 0.10 ms, against 0.12 ms for the row stage this replaced, one
+//! realfft real-to-complex call per row and the same transpose). Column stage: one batched complex FFT of the `K/2 + 1` lines along
 //! x; `k2 < 0` comes from Hermitian symmetry. Each output row is then a contiguous run of one
 //! transformed line. The power spectrum needs no complex deconvolution, `P = |B|² corr(k1)²
 //! corr(k2)² / N` with `B` the transformed fine grid, and fills row `−k2` from row `k2`
@@ -669,8 +669,12 @@ impl Grid {
         } else {
             0
         };
-        let (lead, rows) = self.coef_lanes.split_at(LANES);
-        let load = |c: &[f64]| -> (__m512d, __m512d) {
+        let (lead, rows) = self
+            .coef_lanes
+            .split_first_chunk::<LANES>()
+            .expect("a kernel fit has a leading row");
+        let (rows, _) = rows.as_chunks::<LANES>();
+        let load = |c: &[f64; LANES]| -> (__m512d, __m512d) {
             // SAFETY: `c` holds LANES = 16 values.
             unsafe {
                 (
@@ -689,7 +693,7 @@ impl Grid {
             let ux = _mm512_set1_pd(2.0 * sx - 1.0);
             let uy = _mm512_set1_pd(2.0 * sy - 1.0);
             let (mut x_lo, mut x_hi, mut y_lo, mut y_hi) = (lead_lo, lead_hi, lead_lo, lead_hi);
-            for row in rows.chunks_exact(LANES) {
+            for row in rows {
                 let (c_lo, c_hi) = load(row);
                 x_lo = _mm512_fmadd_pd(x_lo, ux, c_lo);
                 y_lo = _mm512_fmadd_pd(y_lo, uy, c_lo);
@@ -765,7 +769,8 @@ impl Grid {
 
     /// Interpolates the padded complex grid (side `n + W`) at each point.
     ///
-    /// Same CPU dispatch as [`Grid::spread_w`].
+    /// AVX2 with FMA where the CPU has them, else portable code (no AVX-512 path: vectorizing its
+    /// sums would change their order, hence the bits).
     fn interp_w<const W: usize>(&self, grid: &[Complex64], points: &[[f64; 2]]) -> Vec<Complex64> {
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
@@ -846,7 +851,7 @@ impl Grid {
             self.fwd.process_with_scratch(lines, fft);
             // Deconvolve and emit row by row: line k2 ≥ 0 holds B(k1, k2) at k1 mod n; a row with
             // k2 < 0 is the mirror of line −k2, since the grid is real: B(k1, k2) = conj(B(−k1, −k2)).
-            fit(row, k);
+            // The work vector holds BLOCK / 2 packed lines of n ≥ K values.
             let g = &mut row[..k];
             for i in 0..k {
                 let k2 = i as isize - half as isize;
@@ -944,7 +949,8 @@ impl Grid {
 
     /// Spreads the points and runs the row stage, then hands `body` the `K/2 + 1` lines (line `k2`
     /// holds, over x, the transform along y of the grid at `k2`; `n` values each), the FFT scratch
-    /// (long enough for `fwd` in place) and two free work vectors, complex and real.
+    /// (long enough for `fwd` in place), a free complex work slice of `BLOCK / 2 · n ≥ K` values and
+    /// a free real work vector.
     ///
     /// Row stage: the grid is real, so two rows `a`, `b` go through one complex FFT as `z = a + i b`
     /// and are separated by Hermitian symmetry, `â(k) = (Z(k) + conj Z(−k)) / 2` and
@@ -952,13 +958,13 @@ impl Grid {
     /// go through one batched rustfft call, and their separation is fused with the transpose into
     /// the lines, which then receive `BLOCK` contiguous values per `k2`. Measured on the development
     /// machine (n = 320, K = 256): 0.10 ms for the stage, against 0.12 ms for one realfft
-    /// real-to-complex call per row followed by the same transpose.
-    fn type1_lines<R>(
+    /// real-to-complex call per row followed by the same transpose (the row stage until 2026-11-23).
+    fn type1_lines(
         &self,
         points: &[[f64; 2]],
         weight: impl Fn(usize) -> f64,
-        body: impl FnOnce(&mut [Complex64], &mut [Complex64], &mut Vec<Complex64>, &mut Vec<f64>) -> R,
-    ) -> R {
+        body: impl FnOnce(&mut [Complex64], &mut [Complex64], &mut [Complex64], &mut Vec<f64>),
+    ) {
         let (n, k, off) = (self.n, self.res, self.w / 2);
         let side = n + self.w;
         let ncols = k / 2 + 1;

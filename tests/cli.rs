@@ -2541,3 +2541,31 @@ fn negative_reals_reach_their_flags_check() {
         rejects(&args, message, &out);
     }
 }
+
+/// compare's closing line counts its samplers and integrands in the singular when there is one.
+#[test]
+fn compare_counts_one_integrand_in_the_singular() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("one.toml");
+    std::fs::write(
+        &config,
+        "ns = [4, 16]\nrealizations = 2\nclassical = [\"random\"]\nsheared = []\ntables = []\npixel_classes = []\nspectra_n = 4\nspectra_res = 4\nspectra_realizations = 2\n\n[[analytic]]\nlabel = \"edge\"\nspec = \"sheared:s=0.5,c=0.7@xu\"\nshear = [0.5, 0.5]\nshear_range = [0.5, 0.5]\n",
+    )
+    .unwrap();
+    let (out, cache) = (dir.path().join("report"), dir.path().join("cache"));
+    let o = anisospec(&[
+        "compare",
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("compared 1 sampler on 1 integrand in "),
+        "{err}"
+    );
+}

@@ -2542,6 +2542,51 @@ fn negative_reals_reach_their_flags_check() {
     }
 }
 
+/// A radial profile holds the annuli r = 1 … K/2 − 1; at K = 2 there is none, so `spectrum --radial`
+/// and `gallery` (which writes one per spectrum) refuse --res 2 instead of writing header-only CSVs.
+#[test]
+fn radial_profiles_need_a_grid_of_4() {
+    let (dir, csv) = tmp("r.csv");
+    let spec = dir.path().join("s.npy");
+    let (c, s) = (csv.to_str().unwrap(), spec.to_str().unwrap());
+    let args = [
+        "spectrum",
+        "--sampler",
+        "random",
+        "-n",
+        "16",
+        "--res",
+        "2",
+        "--radial",
+        c,
+        "-o",
+        s,
+    ];
+    rejects(&args, "--radial needs --res 4 or more", &csv);
+    assert!(!spec.exists());
+    let o = anisospec(&[
+        "spectrum",
+        "--sampler",
+        "random",
+        "-n",
+        "16",
+        "--res",
+        "4",
+        "--radial",
+        c,
+        "-o",
+        s,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 2);
+    let gallery = dir.path().join("g");
+    rejects(
+        &["gallery", "--res", "2", "--out", gallery.to_str().unwrap()],
+        "give --res 4 or more",
+        &gallery,
+    );
+}
+
 /// compare's closing line counts its samplers and integrands in the singular when there is one.
 #[test]
 fn compare_counts_one_integrand_in_the_singular() {

@@ -2542,6 +2542,38 @@ fn negative_reals_reach_their_flags_check() {
     }
 }
 
+/// A lattice design searches lattices and moves no points: the flags of the point optimizer (a start,
+/// held strata, the solver's limits, the loss's weights) are refused by name before any work, not
+/// ignored.
+#[test]
+fn lattice_designs_refuse_the_optimizers_flags() {
+    let (dir, out) = tmp("fan.npy");
+    let target = dir.path().join("fan.toml");
+    std::fs::write(
+        &target,
+        "kind = \"variance\"\nintegrand = \"fan:s0=0.3,s1=0.7\"\nshear = 0.5\nplacements = 2\nextent = 2.0\ndesign = \"lattice\"\n",
+    )
+    .unwrap();
+    let (t, o) = (target.to_str().unwrap(), out.to_str().unwrap());
+    for (flags, needle) in [
+        (
+            vec!["--init", "sobol", "--latin"],
+            "so --init and --latin would not apply",
+        ),
+        (vec!["--max-iters", "5"], "so --max-iters would not apply"),
+        (
+            vec!["--annular-weight", "3"],
+            "so --annular-weight would not apply",
+        ),
+        (vec!["--exact"], "so --exact would not apply"),
+    ] {
+        let mut args = vec!["optimize", "--target", t, "--dims", "4", "-n", "16"];
+        args.extend(flags);
+        args.extend(["-o", o]);
+        rejects(&args, needle, &out);
+    }
+}
+
 /// A radial profile holds the annuli r = 1 … K/2 − 1; at K = 2 there is none, so `spectrum --radial`
 /// and `gallery` (which writes one per spectrum) refuse --res 2 instead of writing header-only CSVs.
 #[test]

@@ -2646,3 +2646,21 @@ fn compare_counts_one_integrand_in_the_singular() {
         "{err}"
     );
 }
+
+/// A negative pixel reaches `--pixel`'s own check (exit 2, the value and the fix named) instead of
+/// being taken for an unknown flag.
+#[test]
+fn a_negative_pixel_is_named_by_its_flag() {
+    let (_dir, out) = tmp("p.npy");
+    rejects(
+        &[
+            "pixel-spectrum",
+            "--pixel",
+            "-1,2",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "--pixel '-1,2' is not COLUMN,ROW; give two non-negative integers",
+        &out,
+    );
+}

@@ -34,7 +34,7 @@ enum Command {
     Render(cli::render::RenderArgs),
     /// Write the depth oracle per pixel: depth, shear, shear range and class.
     Oracle(cli::oracle::OracleArgs),
-    /// The xu and yv slice spectra of one pixel's integrand.
+    /// The spectrum of one pixel's integrand on one 2D slice (xu, yv or any other projection; --proj).
     PixelSpectrum(cli::pixel_spectrum::PixelSpectrumArgs),
     /// Optimize point sets until their spectra match a target (widened hairline, double wedge, ...) or
     /// their predicted variance for a family of integrands is lowest,

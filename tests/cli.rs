@@ -2541,3 +2541,126 @@ fn negative_reals_reach_their_flags_check() {
         rejects(&args, message, &out);
     }
 }
+
+/// A lattice design searches lattices and moves no points: the flags of the point optimizer (a start,
+/// held strata, the solver's limits, the loss's weights) are refused by name before any work, not
+/// ignored.
+#[test]
+fn lattice_designs_refuse_the_optimizers_flags() {
+    let (dir, out) = tmp("fan.npy");
+    let target = dir.path().join("fan.toml");
+    std::fs::write(
+        &target,
+        "kind = \"variance\"\nintegrand = \"fan:s0=0.3,s1=0.7\"\nshear = 0.5\nplacements = 2\nextent = 2.0\ndesign = \"lattice\"\n",
+    )
+    .unwrap();
+    let (t, o) = (target.to_str().unwrap(), out.to_str().unwrap());
+    for (flags, needle) in [
+        (
+            vec!["--init", "sobol", "--latin"],
+            "so --init and --latin would not apply",
+        ),
+        (vec!["--max-iters", "5"], "so --max-iters would not apply"),
+        (
+            vec!["--annular-weight", "3"],
+            "so --annular-weight would not apply",
+        ),
+        (vec!["--exact"], "so --exact would not apply"),
+    ] {
+        let mut args = vec!["optimize", "--target", t, "--dims", "4", "-n", "16"];
+        args.extend(flags);
+        args.extend(["-o", o]);
+        rejects(&args, needle, &out);
+    }
+}
+
+/// A radial profile holds the annuli r = 1 … K/2 − 1; at K = 2 there is none, so `spectrum --radial`
+/// and `gallery` (which writes one per spectrum) refuse --res 2 instead of writing header-only CSVs.
+#[test]
+fn radial_profiles_need_a_grid_of_4() {
+    let (dir, csv) = tmp("r.csv");
+    let spec = dir.path().join("s.npy");
+    let (c, s) = (csv.to_str().unwrap(), spec.to_str().unwrap());
+    let args = [
+        "spectrum",
+        "--sampler",
+        "random",
+        "-n",
+        "16",
+        "--res",
+        "2",
+        "--radial",
+        c,
+        "-o",
+        s,
+    ];
+    rejects(&args, "--radial needs --res 4 or more", &csv);
+    assert!(!spec.exists());
+    let o = anisospec(&[
+        "spectrum",
+        "--sampler",
+        "random",
+        "-n",
+        "16",
+        "--res",
+        "4",
+        "--radial",
+        c,
+        "-o",
+        s,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 2);
+    let gallery = dir.path().join("g");
+    rejects(
+        &["gallery", "--res", "2", "--out", gallery.to_str().unwrap()],
+        "give --res 4 or more",
+        &gallery,
+    );
+}
+
+/// compare's closing line counts its samplers and integrands in the singular when there is one.
+#[test]
+fn compare_counts_one_integrand_in_the_singular() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("one.toml");
+    std::fs::write(
+        &config,
+        "ns = [4, 16]\nrealizations = 2\nclassical = [\"random\"]\nsheared = []\ntables = []\npixel_classes = []\nspectra_n = 4\nspectra_res = 4\nspectra_realizations = 2\n\n[[analytic]]\nlabel = \"edge\"\nspec = \"sheared:s=0.5,c=0.7@xu\"\nshear = [0.5, 0.5]\nshear_range = [0.5, 0.5]\n",
+    )
+    .unwrap();
+    let (out, cache) = (dir.path().join("report"), dir.path().join("cache"));
+    let o = anisospec(&[
+        "compare",
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("compared 1 sampler on 1 integrand in "),
+        "{err}"
+    );
+}
+
+/// A negative pixel reaches `--pixel`'s own check (exit 2, the value and the fix named) instead of
+/// being taken for an unknown flag.
+#[test]
+fn a_negative_pixel_is_named_by_its_flag() {
+    let (_dir, out) = tmp("p.npy");
+    rejects(
+        &[
+            "pixel-spectrum",
+            "--pixel",
+            "-1,2",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "--pixel '-1,2' is not COLUMN,ROW; give two non-negative integers",
+        &out,
+    );
+}

@@ -56,9 +56,12 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         .unwrap_or_else(crate::render::pixel::default_cache_dir);
     let outcome = compare::run(&config, &args.out, &cache)?;
     eprintln!(
-        "compared {} samplers on {} integrands in {:.1} s; report in {}",
-        outcome.studies.len() / outcome.subjects.len().max(1),
-        outcome.subjects.len(),
+        "compared {} on {} in {:.1} s; report in {}",
+        super::counted(
+            outcome.studies.len() / outcome.subjects.len().max(1),
+            "sampler"
+        ),
+        super::counted(outcome.subjects.len(), "integrand"),
         outcome.seconds,
         args.out.join("report.md").display()
     );

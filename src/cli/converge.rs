@@ -114,7 +114,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             // (chi2/dof), and the interval holds only the two points' own errors, not a curvature.
             // A standard error within rounding defines no weight: no interval.
             Some(fit) if fit.interval().is_none() => println!(
-                "{}: slope {:.3} (95% CI —, chi2/dof —: the realizations differ by no more than f64 rounding, as for an estimator with the same error for every shift; no interval. If the set is random, raise --realizations)",
+                "{}: slope {:.3} (95% CI —, chi2/dof —: at one or more N the realizations differ by no more than f64 rounding (stderr about 0 there), as for an estimator with the same error for every shift or a few realizations that happen to agree; no interval. If the set is random, raise --realizations)",
                 s.sampler, fit.slope
             ),
             Some(fit) if s.points.len() == 2 => println!(

@@ -2,7 +2,7 @@
 //! in `xy` and 4D sets in `xu`, written as PNG, npy and radial CSV with an index page.
 
 use super::ImageKind;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::output::sheet::{write_sheet, Panel};
 use crate::output::{write_atomic, write_folder, ReportMarker};
 use crate::points::Projection;
@@ -59,7 +59,7 @@ pub struct GalleryArgs {
         allow_negative_numbers = true
     )]
     pub n: usize,
-    /// Frequency grid side K (even, at most 8192).
+    /// Frequency grid side K (even, 4 to 8192: each spectrum's radial profile needs an annulus).
     #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub res: usize,
     /// Realizations averaged per spectrum (at most 1000000).
@@ -76,6 +76,13 @@ pub struct GalleryArgs {
 /// Runs `anisospec gallery`.
 pub fn run(args: &GalleryArgs) -> Result<()> {
     check_res(args.res)?;
+    if args.res < 4 {
+        // Every spectrum gets a radial profile, of the annuli r = 1 … K/2 − 1: none below K = 4.
+        return Err(Error::Usage(format!(
+            "--res {} leaves the gallery's radial profiles empty (they hold the annuli r = 1 to K/2 - 1); give --res 4 or more, e.g. --res 128",
+            args.res
+        )));
+    }
     crate::stats::check_realizations("--realizations", args.realizations)?;
     crate::output::check_folder(&args.out, "--out", "gallery")?;
     let method = Method::nufft(args.eps)?;

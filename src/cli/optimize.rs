@@ -77,7 +77,7 @@ pub struct OptimizeArgs {
     #[arg(long, conflicts_with = "eps")]
     pub exact: bool,
     /// NUFFT tolerance for the loss and its gradient, from 1e-12 to 1e-1.
-    #[arg(long, default_value_t = 1e-8, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = DEFAULT_EPS, allow_negative_numbers = true)]
     pub eps: f64,
     /// Largest number of solver iterations per set.
     #[arg(long, default_value_t = DEFAULT_LIMITS.max_iters)]
@@ -90,6 +90,9 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = DEFAULT_LIMITS.tol, allow_negative_numbers = true)]
     pub tol: f64,
 }
+
+/// The default `--eps`: the NUFFT tolerance of the loss and its gradient.
+const DEFAULT_EPS: f64 = 1e-8;
 
 /// The largest `--max-seconds` accepted (about 31 years): a limit, not a schedule.
 const MAX_SECONDS: f64 = 1e9;
@@ -132,10 +135,62 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
     Ok(())
 }
 
+/// Refuses the flags a lattice design would ignore (it searches lattices; it moves no points): a
+/// start, held strata, the solver's limits and the loss's weights. A value given equal to the
+/// default cannot be told from the default and passes.
+fn refuse_solver_flags(args: &OptimizeArgs) -> Result<()> {
+    let mut given: Vec<&str> = Vec::new();
+    if args.init.is_some() {
+        given.push("--init");
+    }
+    if args.latin {
+        given.push("--latin");
+    }
+    if args.exact {
+        given.push("--exact");
+    }
+    if args.eps != DEFAULT_EPS {
+        given.push("--eps");
+    }
+    if args.max_iters != DEFAULT_LIMITS.max_iters {
+        given.push("--max-iters");
+    }
+    if args.max_seconds != DEFAULT_LIMITS.max_seconds {
+        given.push("--max-seconds");
+    }
+    if args.tol != DEFAULT_LIMITS.tol {
+        given.push("--tol");
+    }
+    if args.annular_weight != DEFAULT_ANNULAR_WEIGHT {
+        given.push("--annular-weight");
+    }
+    if args.repulsion_radius != DEFAULT_REPULSION.radius {
+        given.push("--repulsion-radius");
+    }
+    if args.repulsion_weight != DEFAULT_REPULSION.weight {
+        given.push("--repulsion-weight");
+    }
+    if given.is_empty() {
+        return Ok(());
+    }
+    Err(Error::Usage(format!(
+        "{} sets design = \"lattice\": a search over rank-1 lattices, which moves no points, so {} would not apply; leave {} out, or use a target without design = \"lattice\"",
+        args.target.display(),
+        super::spoken_list(
+            &given.iter().map(|f| f.to_string()).collect::<Vec<_>>(),
+            "and"
+        ),
+        if given.len() == 1 { "it" } else { "them" }
+    )))
+}
+
 /// Runs `anisospec optimize`.
 pub fn run(args: &OptimizeArgs) -> Result<()> {
     check_args(args)?;
     let target = Target::load(&args.target)?;
+    if matches!(&target, Target::Variance(v) if v.design() == Design::Lattice) {
+        refuse_solver_flags(args)?;
+    }
     // The table at -o as given (`t.NPY` stays `t.NPY`), the other files beside it.
     let outputs: Vec<PathBuf> = std::iter::once(args.output.clone())
         .chain(

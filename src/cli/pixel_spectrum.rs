@@ -27,8 +27,9 @@ pub struct PixelSpectrumArgs {
     /// TOML scene file overriding the built-in camera; without it the built-in Cornell box is used.
     #[arg(long)]
     pub scene: Option<PathBuf>,
-    /// The pixel as COLUMN,ROW (row 0 at the top), e.g. --pixel 20,20.
-    #[arg(long)]
+    /// The pixel as COLUMN,ROW (row 0 at the top; 0 to width − 1 and height − 1, 0 to 63 in the
+    /// built-in scene), e.g. --pixel 20,20.
+    #[arg(long, allow_hyphen_values = true)]
     pub pixel: String,
     /// Projection: two of x,y,u,v, e.g. xu or yv. The other two coordinates are averaged
     /// (see --average), which gives the k_other = 0 slice of the 4D spectrum.

@@ -71,7 +71,7 @@ pub struct SpectrumArgs {
     #[arg(long)]
     pub stderr: Option<PathBuf>,
     /// Write the radial profile as CSV: r, r/sqrt(N), mean, stderr, anisotropy (dB) and, with --cones,
-    /// one column per directional cone.
+    /// one column per directional cone; one row per annulus r = 1 … K/2 − 1 (needs --res 4 or more).
     #[arg(long)]
     pub radial: Option<PathBuf>,
     /// Number of directional cones in the radial CSV (needs --radial; cone c is centred on angle
@@ -98,6 +98,13 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
         }
     }
     crate::spectrum::profiles::check_cones(args.cones)?;
+    if args.radial.is_some() && args.res < 4 {
+        // The profile holds the annuli r = 1 … K/2 − 1 that lie inside the grid: none below K = 4.
+        return Err(Error::Usage(format!(
+            "--radial needs --res 4 or more: the radial profile holds the annuli r = 1 to K/2 - 1, and --res {} has none; raise --res (e.g. --res 128), or leave out --radial",
+            args.res
+        )));
+    }
     match args.realizations {
         Some(0) => {
             return Err(Error::Usage(

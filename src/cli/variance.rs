@@ -50,6 +50,8 @@ pub struct VarianceArgs {
     #[arg(long, default_value_t = 100, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub realizations: usize,
     /// Number of directional cones (cone c centred on c·180°/M; cone 0 holds the k1 axis); 1 to 360.
+    /// The printed table gives each cone's share, in %, of the sum over the grid; the tail beyond
+    /// the grid is not split by cone.
     #[arg(long, default_value_t = 4, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub cones: usize,
     /// Use the exact DFT for full-grid spectra instead of the NUFFT.
@@ -61,7 +63,8 @@ pub struct VarianceArgs {
     /// Random seed of the realizations.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Write the table as CSV: n, variance, stderr, grid, tail, then cone_c and cone_c_stderr per cone.
+    /// Write the table as CSV: n, variance, stderr, grid (the sum over the grid), tail, then cone_c and
+    /// cone_c_stderr per cone (variances, in squared integrand units, not shares).
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
 }
@@ -94,10 +97,14 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
         None => args.res.to_string(),
     };
     println!(
-        "sampler {} on {} (planes {:?}, K = {grid}, R = {})",
+        "sampler {} on {} (planes {}, K = {grid}, R = {})",
         pred.sampler,
         pred.integrand,
-        pred.planes.iter().map(|p| p.name()).collect::<Vec<_>>(),
+        pred.planes
+            .iter()
+            .map(|p| p.name())
+            .collect::<Vec<_>>()
+            .join(", "),
         args.realizations
     );
     print!(
@@ -131,7 +138,7 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
                 fit.slope
             ),
             None => println!(
-                "predicted slope {:.3} (95% CI —: the realizations differ by no more than the spectrum method's own error (--eps, or f64 rounding with --exact), as for a set whose spectrum is the same for every shift (e.g. a lattice); no interval)",
+                "predicted slope {:.3} (95% CI —: at one or more N the realizations differ by no more than the spectrum method's own error (--eps, or f64 rounding with --exact), as for a set whose spectrum is the same for every shift (e.g. a lattice); no interval)",
                 fit.slope
             ),
         }

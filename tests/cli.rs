@@ -2574,6 +2574,33 @@ fn lattice_designs_refuse_the_optimizers_flags() {
     }
 }
 
+/// At N = 2 the 4D strata term's blue-noise disc reaches no frequency cell. The user gave no
+/// blue-noise target, so the refusal names the strata term and its flags; without the term the
+/// lattice design runs.
+#[test]
+fn a_strata_term_out_of_reach_is_named_as_such() {
+    let (dir, out) = tmp("fan.npy");
+    let target = dir.path().join("fan.toml");
+    std::fs::write(
+        &target,
+        "kind = \"variance\"\nintegrand = \"fan:s0=0.3,s1=0.7\"\nshear = 0.5\nplacements = 0\nextent = 2.0\ndesign = \"lattice\"\n",
+    )
+    .unwrap();
+    let (t, o) = (target.to_str().unwrap(), out.to_str().unwrap());
+    let args = ["optimize", "--target", t, "--dims", "4", "-n", "2", "-o", o];
+    rejects(&args, "the 4D strata term", &out);
+    rejects(&args, "--strat-weight 0", &out);
+    let mut without = args.to_vec();
+    without.extend(["--strat-weight", "0"]);
+    let run = anisospec(&without);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(out.is_file());
+}
+
 /// A radial profile holds the annuli r = 1 … K/2 − 1; at K = 2 there is none, so `spectrum --radial`
 /// and `gallery` (which writes one per spectrum) refuse --res 2 instead of writing header-only CSVs.
 #[test]

@@ -70,8 +70,9 @@ pub struct SpectrumArgs {
     /// realizations).
     #[arg(long)]
     pub stderr: Option<PathBuf>,
-    /// Write the radial profile as CSV: r, r/sqrt(N), mean, stderr, anisotropy (dB) and, with --cones,
-    /// one column per directional cone; one row per annulus r = 1 … K/2 − 1 (needs --res 4 or more).
+    /// Write the radial profile as CSV: r, r/sqrt(N), mean, stderr (empty from one realization),
+    /// anisotropy (dB) and, with --cones, one column per directional cone; one row per annulus
+    /// r = 1 … K/2 − 1 (needs --res 4 or more).
     #[arg(long)]
     pub radial: Option<PathBuf>,
     /// Number of directional cones in the radial CSV (needs --radial; cone c is centred on angle

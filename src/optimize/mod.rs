@@ -109,50 +109,6 @@ impl Setup {
         if let Method::Nufft { eps } = self.method {
             Method::nufft(eps)?;
         }
-        let grid = self.target.grid(self.n)?;
-        let terms = match self.dims {
-            2 => vec![Term {
-                proj: Projection::XY,
-                grid,
-                weight: 1.0,
-            }],
-            4 => {
-                let strata = Target::BlueNoise(BlueNoise {
-                    radius: self.strata.radius,
-                    dark_weight: None,
-                    falloff: None,
-                });
-                strata.validate()?;
-                let sg = strata.grid(self.n)?;
-                let mut t = vec![
-                    Term {
-                        proj: Projection::XU,
-                        grid: grid.clone(),
-                        weight: 1.0,
-                    },
-                    Term {
-                        proj: Projection::YV,
-                        grid,
-                        weight: 1.0,
-                    },
-                ];
-                if self.strata.weight > 0.0 {
-                    for proj in [Projection::XY, Projection::UV] {
-                        t.push(Term {
-                            proj,
-                            grid: sg.clone(),
-                            weight: self.strata.weight,
-                        });
-                    }
-                }
-                t
-            }
-            d => {
-                return Err(Error::Usage(format!(
-                    "--dims {d}: the optimizer makes 2D or 4D sets; use --dims 2 or --dims 4"
-                )))
-            }
-        };
         for (name, v) in [
             ("--repulsion-radius", self.repulsion.radius),
             ("--strat-radius", self.strata.radius),
@@ -176,6 +132,44 @@ impl Setup {
                 )));
             }
         }
+        let grid = self.target.grid(self.n)?;
+        let terms = match self.dims {
+            2 => vec![Term {
+                proj: Projection::XY,
+                grid,
+                weight: 1.0,
+            }],
+            4 => {
+                let mut t = vec![
+                    Term {
+                        proj: Projection::XU,
+                        grid: grid.clone(),
+                        weight: 1.0,
+                    },
+                    Term {
+                        proj: Projection::YV,
+                        grid,
+                        weight: 1.0,
+                    },
+                ];
+                if self.strata.weight > 0.0 {
+                    let sg = self.strata_grid()?;
+                    for proj in [Projection::XY, Projection::UV] {
+                        t.push(Term {
+                            proj,
+                            grid: sg.clone(),
+                            weight: self.strata.weight,
+                        });
+                    }
+                }
+                t
+            }
+            d => {
+                return Err(Error::Usage(format!(
+                    "--dims {d}: the optimizer makes 2D or 4D sets; use --dims 2 or --dims 4"
+                )))
+            }
+        };
         Ok(Objective {
             n: self.n,
             dims: self.dims,
@@ -184,6 +178,28 @@ impl Setup {
             annular_weight: self.annular_weight,
             method: self.method,
         })
+    }
+}
+
+impl Setup {
+    /// The blue-noise grid of the 4D strata term on `xy` and `uv`; its errors name that term and its
+    /// flags, since the user gave no blue-noise target.
+    fn strata_grid(&self) -> Result<crate::targets::TargetGrid> {
+        let strata = Target::BlueNoise(BlueNoise {
+            radius: self.strata.radius,
+            dark_weight: None,
+            falloff: None,
+        });
+        strata
+            .validate()
+            .and_then(|()| strata.grid(self.n))
+            .map_err(|e| match e {
+                Error::Usage(m) | Error::Input(m) => Error::Input(format!(
+                    "the 4D strata term (a blue-noise disc of radius --strat-radius {} on xy and uv): {m}; or drop the term with --strat-weight 0",
+                    self.strata.radius
+                )),
+                other => other,
+            })
     }
 }
 

@@ -52,8 +52,9 @@ pub struct RadialBin {
     pub r_normalized: f64,
     /// Mean of `E[P]` over the annulus.
     pub mean: f64,
-    /// Standard error of `mean` (per-bin standard errors combined as independent).
-    pub stderr: f64,
+    /// Standard error of `mean` (per-bin standard errors combined as independent); `None` from a
+    /// single realization, whose spread is unknown.
+    pub stderr: Option<f64>,
     /// `10 log10(var / mean²)` of `E[P]` within the annulus, in dB.
     pub anisotropy_db: f64,
     /// Mean of `E[P]` in each directional cone of the annulus (`None` where a cone has no bin).
@@ -106,7 +107,7 @@ pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize) -> Vec<RadialBin> {
                 r,
                 r_normalized: r as f64 / (spec.n as f64).sqrt(),
                 mean,
-                stderr: var_sum[r].sqrt() / c,
+                stderr: (spec.realizations > 1).then(|| var_sum[r].sqrt() / c),
                 anisotropy_db,
                 cones: (0..cones)
                     .map(|k| {
@@ -119,7 +120,8 @@ pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize) -> Vec<RadialBin> {
 }
 
 /// Writes a radial profile as CSV: `r, r_normalized, mean, stderr, anisotropy_db` and one `cone_c` column
-/// per cone, headed with the cone's centre angle in degrees (empty cell where a cone has no bin).
+/// per cone, headed with the cone's centre angle in degrees (an empty cell where a cone has no bin, and
+/// in `stderr` from a single realization).
 pub fn write_radial_csv(path: &Path, profile: &[RadialBin]) -> Result<()> {
     let cones = profile.first().map_or(0, |b| b.cones.len());
     write_atomic(path, |w| {
@@ -129,10 +131,11 @@ pub fn write_radial_csv(path: &Path, profile: &[RadialBin]) -> Result<()> {
         }
         writeln!(w)?;
         for b in profile {
+            let stderr = b.stderr.map_or(String::new(), |se| se.to_string());
             write!(
                 w,
-                "{},{},{},{},{}",
-                b.r, b.r_normalized, b.mean, b.stderr, b.anisotropy_db
+                "{},{},{},{stderr},{}",
+                b.r, b.r_normalized, b.mean, b.anisotropy_db
             )?;
             for c in &b.cones {
                 match c {
@@ -176,6 +179,15 @@ mod tests {
         for b in prof {
             assert_eq!(b.mean, 1.0);
             assert!(b.cones.iter().flatten().all(|&c| c == 1.0));
+            // Independent bins of standard error 0.5: the annulus mean's is 0.5 / sqrt(count) > 0.
+            assert!(b.stderr.is_some_and(|se| se > 0.0 && se < 0.5), "{b:?}");
         }
+        // One realization has no spread to estimate: no standard error, not a zero one.
+        let one = ExpectedSpectrum {
+            realizations: 1,
+            stderr: vec![0.0; res * res],
+            ..spec
+        };
+        assert!(radial_profile(&one, 0).iter().all(|b| b.stderr.is_none()));
     }
 }

@@ -2018,17 +2018,17 @@ fn counts_must_be_positive_and_distinct() {
     let cases: [(Vec<&str>, &str, &Path); 7] = [
         (
             vec!["sample", "--sampler", "mj", "-n", "-5", "-o", o],
-            "N must be a positive integer (1 or more), not -5",
+            "a point count must be a positive integer (1 or more), not -5",
             &out,
         ),
         (
             vec!["sample", "--sampler", "mj", "-n", "0", "-o", o],
-            "N must be a positive integer",
+            "a point count must be a positive integer",
             &out,
         ),
         (
             vec!["spectrum", "--sampler", "mj", "-n", "-16", "-o", o],
-            "N must be a positive integer",
+            "a point count must be a positive integer",
             &out,
         ),
         (
@@ -2048,7 +2048,7 @@ fn counts_must_be_positive_and_distinct() {
         ),
         (
             vec!["render", "--sampler", "padded-mj", "--spp", "-4", "-o", o],
-            "N must be a positive integer",
+            "a point count must be a positive integer",
             &out,
         ),
         (

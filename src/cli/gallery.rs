@@ -59,14 +59,15 @@ pub struct GalleryArgs {
         allow_negative_numbers = true
     )]
     pub n: usize,
-    /// Frequency grid side K (even, 4 to 8192: each spectrum's radial profile needs an annulus).
+    /// Frequency grid side K (even, at least 4 and at most 8192: each spectrum's radial profile needs an
+    /// annulus).
     #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub res: usize,
     /// Realizations averaged per spectrum (at most 1000000).
     #[arg(long, default_value_t = 64, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub realizations: usize,
     /// NUFFT tolerance (relative error of P), from 1e-12 to 1e-1.
-    #[arg(long, default_value_t = 1e-6, allow_negative_numbers = true)]
+    #[arg(long, default_value = "1e-6", allow_negative_numbers = true)]
     pub eps: f64,
     /// Random seed.
     #[arg(long, default_value_t = 1)]

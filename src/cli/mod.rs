@@ -75,7 +75,11 @@ fn parse_at_least(text: &str, least: i128, rule: &str) -> std::result::Result<us
 
 /// Parses a point count N (`-n`, `--spp`): a positive integer.
 pub fn parse_count(text: &str) -> std::result::Result<usize, String> {
-    parse_at_least(text, 1, "N must be a positive integer (1 or more)")
+    parse_at_least(
+        text,
+        1,
+        "a point count must be a positive integer (1 or more)",
+    )
 }
 
 /// Parses a count flag other than N (`--res`, `--realizations`, `--sets`, `--cones`, `--average`): a

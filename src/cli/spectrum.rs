@@ -54,7 +54,7 @@ pub struct SpectrumArgs {
     #[arg(long, conflicts_with = "eps")]
     pub exact: bool,
     /// NUFFT tolerance (relative error of P), from 1e-12 to 1e-1.
-    #[arg(long, default_value_t = 1e-6, allow_negative_numbers = true)]
+    #[arg(long, default_value = "1e-6", allow_negative_numbers = true)]
     pub eps: f64,
     /// Random seed of the realizations (with --sampler).
     #[arg(long, default_value_t = 1)]

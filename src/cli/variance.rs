@@ -58,7 +58,7 @@ pub struct VarianceArgs {
     #[arg(long, conflicts_with = "eps")]
     pub exact: bool,
     /// NUFFT tolerance for full-grid spectra (relative error of P), from 1e-12 to 1e-1.
-    #[arg(long, default_value_t = 1e-9, allow_negative_numbers = true)]
+    #[arg(long, default_value = "1e-9", allow_negative_numbers = true)]
     pub eps: f64,
     /// Random seed of the realizations.
     #[arg(long, default_value_t = 1)]

@@ -499,9 +499,10 @@ fn write_markdown(
         write_robustness(w, outcome, robustness_plots)?;
         write_tables(w, outcome, specs)?;
         writeln!(w, "\n## Spectra\n")?;
+        let (lo, hi) = GALLERY_SHEAR_RANGE;
         writeln!(
             w,
-            "Expected power spectra, N = {}, K = {}, {} realizations; sheared and optimized samplers at shear 0.5 (the double-wedge table made for shears 0.3 to 0.7). \
+            "Expected power spectra, N = {}, K = {}, {} realizations; whatever the integrands' shears, the sheared samplers and the tables are shown at the gallery's own shear 0.5, the tables framed for shears {lo} to {hi}. \
              log10 P from -2 (black) to 1 (white).\n",
             c.spectra_n, c.spectra_res, c.spectra_realizations
         )?;

@@ -307,7 +307,12 @@ pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Res
         .iter()
         .map(|s| Series {
             label: match &s.fit {
-                Some(f) => format!("{}: slope {:.2} {}", s.sampler, f.slope, f.interval_text(2)),
+                Some(f) => format!(
+                    "{}: slope {:.2}, 95% CI {}",
+                    s.sampler,
+                    f.slope,
+                    f.interval_text(2)
+                ),
                 None => s.sampler.clone(),
             },
             points: s.points.iter().map(|p| (p.n as f64, p.mse)).collect(),

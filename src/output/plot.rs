@@ -13,7 +13,7 @@ use std::sync::Once;
 /// One line of a plot.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Series {
-    /// Legend text, e.g. `jittered: slope -1.51 [-1.55, -1.47]`.
+    /// Legend text, e.g. `jittered: slope -1.51, 95% CI [-1.55, -1.47]`.
     pub label: String,
     /// `(x, y)` points: `y` positive, and `x` too on a log axis (points that are not are skipped).
     pub points: Vec<(f64, f64)>,

@@ -2574,6 +2574,47 @@ fn lattice_designs_refuse_the_optimizers_flags() {
     }
 }
 
+/// `variance --shear` predicts in the sheared pattern's frame, which needs the integrand on the xu and
+/// yv planes (the planes the shear moves within) and a grid it can sample; either refusal names the
+/// fix, and nothing is written.
+#[test]
+fn variance_with_a_shear_refuses_what_it_cannot_pull_back() {
+    let (_dir, out) = tmp("v.csv");
+    let o = out.to_str().unwrap();
+    let base = [
+        "variance",
+        "--sampler",
+        "padded-mj",
+        "-n",
+        "16",
+        "--shear",
+        "0.5,0.5",
+    ];
+    let with = |extra: &[&'static str]| {
+        let mut a = base.to_vec();
+        a.extend_from_slice(extra);
+        a.extend(["-o", o]);
+        a
+    };
+    rejects(
+        &with(&["--integrand", "gaussian@xy"]),
+        "needs an integrand on the xu and yv planes",
+        &out,
+    );
+    rejects(
+        &with(&["--integrand", "sheared:s=0.5@xu", "--res", "2048"]),
+        "so that K is at most 1024",
+        &out,
+    );
+    let run = anisospec(&with(&["--integrand", "sheared:s=0.5@xu", "--res", "64"]));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(String::from_utf8_lossy(&run.stdout).contains("padded-mj+shear(0.5,0.5,transported)"));
+}
+
 /// At N = 2 the 4D strata term's blue-noise disc reaches no frequency cell. The user gave no
 /// blue-noise target, so the refusal names the strata term and its flags; without the term the
 /// lattice design runs.

@@ -38,7 +38,7 @@ pub fn sampler_with_shear(name: &str, dims: usize, shear: &ShearArgs) -> Result<
     match shear.shear {
         None => Ok(inner),
         Some(_) if dims != 4 => Err(Error::Usage(
-            "--shear applies to the xu and yv projections of 4D sets; ask for 4D sets (--dims 4 in sample and spectrum, a 4D integrand such as sheared:s=0.5@xu in converge)".into(),
+            "--shear applies to the xu and yv projections of 4D sets; ask for 4D sets (--dims 4 in sample and spectrum, a 4D integrand such as sheared:s=0.5@xu in converge and variance)".into(),
         )),
         Some((sx, sy)) => Ok(Box::new(samplers::Sheared::new(
             inner,

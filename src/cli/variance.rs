@@ -1,6 +1,7 @@
 //! `anisospec variance`: the Fourier-domain variance prediction of a sampler on an integrand, with the
 //! directional-cone breakdown and the predicted slope.
 
+use super::{sampler_with_shear, ShearArgs};
 use crate::error::Result;
 use crate::integrands::parse;
 use crate::samplers;
@@ -63,6 +64,12 @@ pub struct VarianceArgs {
     /// Random seed of the realizations.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// The sampler sheared as --shear and --shear-mode say (4D integrands on xu and yv only): the
+    /// prediction is made in the unsheared pattern's frame, for the integrand pulled back through the
+    /// shear, sampled on a grid of 4K (at most 4096) per side, so K is at most 1024. Give the oracle's
+    /// shear off by some error to predict a sheared sampler's robustness to it.
+    #[command(flatten)]
+    pub shear: ShearArgs,
     /// Write the table as CSV: n, variance, stderr, grid (the sum over the grid), tail, then cone_c and
     /// cone_c_stderr per cone (variances, in squared integrand units, not shares).
     #[arg(short = 'o', long)]
@@ -77,7 +84,7 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
         crate::output::check_outputs(&[out], &samplers::input_files(&args.sampler))?;
     }
     let f = parse(&args.integrand)?;
-    let sampler = samplers::build(&args.sampler, f.dims())?;
+    let sampler = sampler_with_shear(&args.sampler, f.dims(), &args.shear)?;
     let method = if args.exact {
         Method::Exact
     } else {

@@ -9,6 +9,7 @@
 
 pub mod compose;
 pub mod polygon;
+pub mod sampled;
 pub mod shapes;
 pub mod spec;
 

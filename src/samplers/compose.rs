@@ -154,4 +154,12 @@ impl Sampler for Sheared {
         shear_set_4d(&mut set, self.sx, self.sy, self.mode);
         set
     }
+    fn shear_frame(&self) -> Option<super::ShearFrame<'_>> {
+        Some(super::ShearFrame {
+            pattern: self.inner.as_ref(),
+            sx: self.sx,
+            sy: self.sy,
+            mode: self.mode,
+        })
+    }
 }

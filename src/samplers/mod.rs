@@ -52,6 +52,26 @@ pub trait Sampler: Send + Sync {
         crate::points::toroidal_shift(&mut set, shift);
         set
     }
+
+    /// For a sampler that shears the sets of another ([`Sheared`]): that sampler and the shear. The
+    /// random shift moves the unsheared pattern, so the variance of DESIGN §4 holds in the pattern's
+    /// frame, for the integrand pulled back through the shear ([`crate::variance::predict`]). `None`
+    /// for every other sampler.
+    fn shear_frame(&self) -> Option<ShearFrame<'_>> {
+        None
+    }
+}
+
+/// The frame of a sheared sampler (see [`Sampler::shear_frame`]).
+pub struct ShearFrame<'a> {
+    /// The sampler whose sets are sheared.
+    pub pattern: &'a dyn Sampler,
+    /// Shear in `xu` (`x + sx u` carries the pattern's `x`).
+    pub sx: f64,
+    /// Shear in `yv`.
+    pub sy: f64,
+    /// How the shear is applied.
+    pub mode: crate::points::shear::ShearMode,
 }
 
 /// Checks `n` for `sampler`, with a message naming the nearest valid `n`, and its parameters at `n`.

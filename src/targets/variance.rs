@@ -15,11 +15,9 @@
 //! against its exact coefficients).
 
 use crate::error::{Error, Result};
+use crate::integrands::sampled::sampled_power;
 use crate::integrands::{spec, Integrand};
 use crate::points::shear::{shear_pair, ShearMode, MAX_SHEAR};
-use rayon::prelude::*;
-use rustfft::num_complex::Complex64;
-use rustfft::FftPlanner;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -245,42 +243,17 @@ impl Variance {
         Ok(total)
     }
 
-    /// `|ĝ|²` of one integrand: samples of `f ∘ S` at the cell centres of an `m × m` grid, an FFT along
-    /// the second coordinate, then along the first for the kept `k2` only.
+    /// `|ĝ|²` of one integrand: `f ∘ S` sampled on an `m × m` grid
+    /// ([`crate::integrands::sampled::sampled_power`]).
     fn power(&self, f: &dyn Integrand, res: usize, m: usize) -> Vec<f64> {
-        let fft = FftPlanner::new().plan_fft_forward(m);
-        let scale = 1.0 / (m * m) as f64;
-        // rows[i]: the first coordinate at (i + ½)/m, transformed along the second.
-        let mut rows: Vec<Complex64> = vec![Complex64::new(0.0, 0.0); m * m];
-        rows.par_chunks_exact_mut(m)
-            .enumerate()
-            .for_each(|(i, row)| {
-                let a = (i as f64 + 0.5) / m as f64;
-                for (j, z) in row.iter_mut().enumerate() {
-                    let b = (j as f64 + 0.5) / m as f64;
-                    let (x, u) = shear_pair(a, b, self.shear, ShearMode::Transported);
-                    *z = Complex64::new(f.eval(&[x, u]) * scale, 0.0);
-                }
-                fft.process(row);
-            });
-        let half = (res / 2) as i64;
-        let bin = |k: i64| k.rem_euclid(m as i64) as usize;
-        // One column per kept k2, transformed along the first coordinate.
-        let columns: Vec<Vec<Complex64>> = (-half..half)
-            .into_par_iter()
-            .map(|k2| {
-                let mut col: Vec<Complex64> = (0..m).map(|i| rows[i * m + bin(k2)]).collect();
-                fft.process(&mut col);
-                col
-            })
-            .collect();
-        let mut out = vec![0.0; res * res];
-        for (i, col) in columns.iter().enumerate() {
-            for (j, v) in out[i * res..(i + 1) * res].iter_mut().enumerate() {
-                *v = col[bin(j as i64 - half)].norm_sqr();
-            }
-        }
-        out
+        sampled_power(
+            |a, b| {
+                let (x, u) = shear_pair(a, b, self.shear, ShearMode::Transported);
+                f.eval(&[x, u])
+            },
+            res,
+            m,
+        )
     }
 }
 

@@ -8,13 +8,22 @@
 //!
 //! Only the 2D spectra of the projections that carry `f̂` are needed ([`Integrand::spectral_planes`]);
 //! a frequency shared by two planes (a common axis) is counted once.
+//!
+//! A sheared sampler ([`Sampler::shear_frame`]) shifts its pattern before it shears it, so the formula
+//! holds in the pattern's frame: `P` is the unsheared pattern's spectrum and `f̂` becomes `ĝ` of the
+//! integrand pulled back through the shear, `g = f ∘ S`, which has no closed form. `ĝ` is then sampled
+//! ([`crate::integrands::sampled::sampled_power`]) on an `m × m` grid per plane, `m` the power of two
+//! at least `max(256, 4K)` and at most [`MAX_PULLBACK_SAMPLES`], good to about `|k| / m` relative
+//! where `g` jumps. The shear preserves area, so `∫g² = ∫f²` and the tail is estimated as before.
 
 use crate::converge::{check_plan, fit_power_law, SlopeFit};
 use crate::error::{Error, Result};
+use crate::integrands::sampled::sampled_power;
 use crate::integrands::Integrand;
+use crate::points::shear::shear_pair;
 use crate::points::{project, Projection};
 use crate::rng;
-use crate::samplers::Sampler;
+use crate::samplers::{Sampler, ShearFrame};
 use crate::spectrum::profiles::cone_index;
 use crate::spectrum::{check_res, fourier_sums, frequency, Method};
 use crate::stats::Welford;
@@ -106,14 +115,23 @@ const MAX_GRID: usize = 1 << 26;
 /// Frequencies below this fraction of the largest `|f̂|²` are left to the tail.
 const NEGLIGIBLE: f64 = 1e-20;
 
-fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spectrum> {
-    let planes = f.spectral_planes().ok_or_else(|| {
+/// Largest side of the grid a pulled-back integrand is sampled on (256 MiB of complex samples), so
+/// the largest frequency grid of a sheared sampler's prediction is `K = 1024`.
+pub const MAX_PULLBACK_SAMPLES: usize = 4096;
+
+/// The planes that carry `f̂`, or a usage error when it spreads over all frequencies.
+fn planes_of(f: &dyn Integrand) -> Result<Vec<Projection>> {
+    f.spectral_planes().ok_or_else(|| {
         Error::Usage(format!(
             "the spectrum of {} spreads over all {}D frequencies (a product over two projections); the Fourier prediction needs it on 2D projections (single integrands or sums of @proj terms); measure it with `anisospec converge` instead",
             f.name(),
             f.dims()
         ))
-    })?;
+    })
+}
+
+fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spectrum> {
+    let planes = planes_of(f)?;
     if res.saturating_mul(res).saturating_mul(planes.len()) > MAX_GRID {
         return Err(Error::Usage(format!(
             "a {res} x {res} frequency grid on {} plane(s) is more than the {MAX_GRID} coefficients the prediction evaluates; lower --res or --res-per-n",
@@ -152,6 +170,81 @@ fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spe
                     f.name()
                 ))
             })?;
+        max_w = list.iter().fold(max_w, |m, e| m.max(e.1));
+        active.push(list);
+    }
+    for list in &mut active {
+        list.retain(|e| e.1 > NEGLIGIBLE * max_w);
+    }
+    let total = active.iter().flatten().map(|e| e.1).sum();
+    Ok(Spectrum {
+        planes,
+        active,
+        total,
+    })
+}
+
+/// The active frequencies of `ĝ` for `g = f ∘ S`, the integrand seen from the pattern of a sheared
+/// sampler (see the module doc). The shear moves `x` with `u` and `y` with `v`, so `f̂` must lie on
+/// the `xu` and `yv` planes; a plane's `ĝ` is sampled with the other two coordinates held at ½ (they
+/// shift `g` by a constant there, which changes only `k = 0`).
+fn pulled_back_spectrum(
+    f: &dyn Integrand,
+    frame: &ShearFrame,
+    res: usize,
+    cones: usize,
+) -> Result<Spectrum> {
+    let planes = planes_of(f)?;
+    if let Some(p) = planes
+        .iter()
+        .find(|p| **p != Projection::XU && **p != Projection::YV)
+    {
+        return Err(Error::Usage(format!(
+            "{} has spectrum on the {} plane; the prediction for a sheared sampler needs an integrand on the xu and yv planes (the shear moves x with u and y with v), e.g. sheared:s=0.5@xu; predict the unsheared sampler, or measure it with `anisospec converge`",
+            f.name(),
+            p.name()
+        )));
+    }
+    let m = (4 * res).max(256).next_power_of_two();
+    if m > MAX_PULLBACK_SAMPLES {
+        return Err(Error::Usage(format!(
+            "a sheared sampler's prediction samples the pulled-back integrand on {m} x {m} points for a {res} x {res} frequency grid, more than the largest, {MAX_PULLBACK_SAMPLES} x {MAX_PULLBACK_SAMPLES}; lower --res or --res-per-n so that K is at most {}",
+            MAX_PULLBACK_SAMPLES / 4
+        )));
+    }
+    let mut active = Vec::with_capacity(planes.len());
+    let mut max_w: f64 = 0.0;
+    for p in &planes {
+        let s = if *p == Projection::XU {
+            frame.sx
+        } else {
+            frame.sy
+        };
+        let power = sampled_power(
+            |a, b| {
+                let (x, u) = shear_pair(a, b, s, frame.mode);
+                let mut at = [0.5; 4];
+                at[p.a] = x;
+                at[p.b] = u;
+                f.eval(&at)
+            },
+            res,
+            m,
+        );
+        if power.iter().any(|w| !w.is_finite()) {
+            return Err(Error::Input(format!(
+                "{} has a non-finite value in the unit square, so its spectrum is undefined",
+                f.name()
+            )));
+        }
+        let list: Vec<(usize, f64, usize)> = power
+            .iter()
+            .enumerate()
+            .filter_map(|(idx, &w)| {
+                let (k1, k2) = frequency(idx, res);
+                ((k1, k2) != (0, 0) && w > 0.0).then(|| (idx, w, cone_index(k1, k2, cones)))
+            })
+            .collect();
         max_w = list.iter().fold(max_w, |m, e| m.max(e.1));
         active.push(list);
     }
@@ -351,7 +444,8 @@ fn stderr_floor(rho: f64, realizations: usize, part: f64) -> f64 {
     (rho + r * f64::EPSILON / 2.0) * part / (r - 1.0).sqrt()
 }
 
-/// Predicts the variance of `sampler` on `f` for every `N` of `ns`.
+/// Predicts the variance of `sampler` on `f` for every `N` of `ns`; a sheared sampler in its pattern's
+/// frame (see the module doc).
 pub fn predict(
     sampler: &dyn Sampler,
     f: &dyn Integrand,
@@ -360,6 +454,18 @@ pub fn predict(
 ) -> Result<VariancePrediction> {
     check_plan(sampler, f, ns, cfg.realizations)?;
     check_config(cfg)?;
+    // A sheared sampler is predicted in its pattern's frame (see the module doc).
+    let frame = sampler.shear_frame();
+    if frame
+        .as_ref()
+        .is_some_and(|fr| fr.pattern.shear_frame().is_some())
+    {
+        return Err(Error::Usage(format!(
+            "{} is sheared twice; the prediction takes one shear: shear the pattern once",
+            sampler.name()
+        )));
+    }
+    let pattern = frame.as_ref().map_or(sampler, |fr| fr.pattern);
     let planes = f.spectral_planes().unwrap_or_default();
     let var_f = f.mean_square().map(|m| m - f.reference().value.powi(2));
     let mut points = Vec::with_capacity(ns.len());
@@ -371,10 +477,14 @@ pub fn predict(
             .res_per_n
             .map_or(cfg.res, |m| cfg.res.max((m * n).div_ceil(2) * 2));
         if spec.as_ref().is_none_or(|s| s.0 != res) {
-            spec = Some((res, integrand_spectrum(f, res, cfg.cones)?));
+            let computed = match &frame {
+                Some(fr) => pulled_back_spectrum(f, fr, res, cfg.cones)?,
+                None => integrand_spectrum(f, res, cfg.cones)?,
+            };
+            spec = Some((res, computed));
         }
         let spec = &spec.as_ref().expect("computed above").1;
-        let per = realizations(sampler, spec, n, res, cfg);
+        let per = realizations(pattern, spec, n, res, cfg);
         let (grid, stderr) = (per.total.mean(), per.total.stderr());
         let cones = per.cones.iter().map(Welford::mean).collect();
         let cone_stderr = per.cones.iter().map(Welford::stderr).collect();

@@ -27,6 +27,11 @@ enum Command {
     /// List the integrands and their keys.
     Integrands(cli::integrands::IntegrandsArgs),
     /// Predict variance from spectra, Var(N) = (1/N) Σ |f̂(k)|² E[P_N(k)], split by directional cone.
+    ///
+    /// With --shear the sampler shifts its pattern before it shears it, so the prediction is made in
+    /// the unsheared pattern's frame, for the integrand pulled back through the shear: the integrand
+    /// must lie on the xu and yv planes (e.g. sheared:s=0.5@xu+sheared:s=0.5@yv), and K is at most
+    /// 1024 (the pulled-back integrand is sampled on 4K points per side, at most 4096).
     Variance(cli::variance::VarianceArgs),
     /// Measure the convergence of samplers on an integrand: MSE against N, slope, time.
     Converge(cli::converge::ConvergeArgs),

@@ -2615,6 +2615,42 @@ fn variance_with_a_shear_refuses_what_it_cannot_pull_back() {
     assert!(String::from_utf8_lossy(&run.stdout).contains("padded-mj+shear(0.5,0.5,transported)"));
 }
 
+/// `variance --shear` says, in its help and in its tail warning, that K stops at 1024 (the
+/// pulled-back integrand's sampling grid) and that the cones are the pattern's directions: the flat
+/// advice to raise --res or --res-per-n would lead past it to a refusal. (The flattened ShearArgs
+/// field's doc comment is not shown by clap, so the help says it elsewhere.)
+#[test]
+fn variance_with_a_shear_says_where_its_grid_stops() {
+    let help = anisospec(&["variance", "--help"]);
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(text.contains("with --shear at most 1024"), "{text}");
+    assert!(text.contains("unsheared pattern's frame"), "{text}");
+    assert!(
+        text.contains("the directions are the unsheared pattern's"),
+        "{text}"
+    );
+    // The exact shear puts the edge on the pattern's k1 axis, dark up to N: the tail dominates.
+    let run = anisospec(&[
+        "variance",
+        "--sampler",
+        "padded-mj",
+        "--integrand",
+        "sheared:s=0.5,c=0.7@xu",
+        "-n",
+        "256",
+        "--res",
+        "64",
+        "--realizations",
+        "8",
+        "--shear",
+        "0.5,0.5",
+    ]);
+    assert!(run.status.success());
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(err.contains("white-noise tail"), "{err}");
+    assert!(err.contains("up to K = 1024 with --shear"), "{err}");
+}
+
 /// At N = 2 the 4D strata term's blue-noise disc reaches no frequency cell. The user gave no
 /// blue-noise target, so the refusal names the strata term and its flags; without the term the
 /// lattice design runs.

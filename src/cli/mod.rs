@@ -220,13 +220,21 @@ mod tests {
         let res = format!("at most {}", crate::spectrum::MAX_RES);
         let shear = format!("at most {:e}", crate::points::shear::MAX_SHEAR);
         let eps = format!("from {:e} to {:e}", EPS_MIN, EPS_MAX);
+        // A sheared sampler's prediction samples its pulled-back integrand on 4K points per side.
+        let pullback = format!(
+            "with --shear at most {}",
+            crate::variance::MAX_PULLBACK_SAMPLES / 4
+        );
         let cases: [(String, &[&String]); 6] = [
             (help::<super::sample::SampleArgs>(), &[&shear]),
             (
                 help::<super::spectrum::SpectrumArgs>(),
                 &[&res, &shear, &eps],
             ),
-            (help::<super::variance::VarianceArgs>(), &[&res, &eps]),
+            (
+                help::<super::variance::VarianceArgs>(),
+                &[&res, &eps, &shear, &pullback],
+            ),
             (help::<super::gallery::GalleryArgs>(), &[&res, &eps]),
             (help::<super::optimize::OptimizeArgs>(), &[&eps]),
             (help::<super::converge::ConvergeArgs>(), &[&shear]),

@@ -38,8 +38,9 @@ pub struct VarianceArgs {
         allow_negative_numbers = true
     )]
     pub n: Vec<usize>,
-    /// Frequency grid side K (even, at most 8192) in each projection; the rest of the sum is estimated
-    /// as white noise (Parseval) and reported as the tail.
+    /// Frequency grid side K (even, at most 8192; with --shear at most 1024, as the integrand pulled
+    /// back through the shear is sampled on 4K points per side) in each projection; the rest of the sum
+    /// is estimated as white noise (Parseval) and reported as the tail.
     #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub res: usize,
     /// Grow the grid with N: K = max(--res, M·N), with K² times the integrand's planes at most 8192².
@@ -52,7 +53,8 @@ pub struct VarianceArgs {
     pub realizations: usize,
     /// Number of directional cones (cone c centred on c·180°/M; cone 0 holds the k1 axis); 1 to 360.
     /// The printed table gives each cone's share, in %, of the sum over the grid; the tail beyond
-    /// the grid is not split by cone.
+    /// the grid is not split by cone. With --shear the directions are the unsheared pattern's: an
+    /// edge the shear matches lies on its k1 axis, in cone 0.
     #[arg(long, default_value_t = 4, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub cones: usize,
     /// Use the exact DFT for full-grid spectra instead of the NUFFT.
@@ -64,10 +66,10 @@ pub struct VarianceArgs {
     /// Random seed of the realizations.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// The sampler sheared as --shear and --shear-mode say (4D integrands on xu and yv only): the
-    /// prediction is made in the unsheared pattern's frame, for the integrand pulled back through the
-    /// shear, sampled on a grid of 4K (at most 4096) per side, so K is at most 1024. Give the oracle's
-    /// shear off by some error to predict a sheared sampler's robustness to it.
+    // The sampler sheared as --shear and --shear-mode say (4D integrands on xu and yv only): the
+    // prediction is made in the unsheared pattern's frame, for the integrand pulled back through the
+    // shear, sampled on a grid of 4K (at most 4096) per side, so K is at most 1024. (clap shows no
+    // doc comment of a flattened field: the command's long help in main.rs, --res and --cones say it.)
     #[command(flatten)]
     pub shear: ShearArgs,
     /// Write the table as CSV: n, variance, stderr, grid (the sum over the grid), tail, then cone_c and
@@ -163,7 +165,7 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
             }
         }
     }
-    warn_dominant_tail(&pred);
+    warn_dominant_tail(&pred, args.shear.shear.is_some());
     if let Some(out) = &args.output {
         write_csv(out, &pred)?;
     }
@@ -171,8 +173,9 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
 }
 
 /// Warns on stderr, in one line, at every `N` whose tail is more than [`TAIL_WARNING_SHARE`] of the
-/// prediction: its share, its grid, the `P = 1` assumption behind it and the flags that push it out.
-fn warn_dominant_tail(pred: &VariancePrediction) {
+/// prediction: its share, its grid, the `P = 1` assumption behind it and the flags that push it out
+/// (within K = 1024 for a sheared sampler, whose pulled-back integrand allows no more).
+fn warn_dominant_tail(pred: &VariancePrediction, sheared: bool) {
     let dominated: Vec<String> = pred
         .points
         .iter()
@@ -185,8 +188,16 @@ fn warn_dominant_tail(pred: &VariancePrediction) {
     if dominated.is_empty() {
         return;
     }
+    let fix = if sheared {
+        format!(
+            "raise --res or --res-per-n (K = max(--res, M·N)) to push the tail out, up to K = {} with --shear; past it, measure with `anisospec converge`",
+            crate::variance::MAX_PULLBACK_SAMPLES / 4
+        )
+    } else {
+        "raise --res-per-n (K = max(--res, M·N)) or --res to push the tail out".to_string()
+    };
     eprintln!(
-        "warning: the white-noise tail is more than {:.0} % of the predicted variance at {}: it assumes the sampler's spectrum is white (P = 1) beyond the frequency grid, which overstates the variance of a sampler whose spectrum is still below 1 there (jittered or N-rooks past a grid of a few N); raise --res-per-n (K = max(--res, M·N)) or --res to push the tail out",
+        "warning: the white-noise tail is more than {:.0} % of the predicted variance at {}: it assumes the sampler's spectrum is white (P = 1) beyond the frequency grid, which overstates the variance of a sampler whose spectrum is still below 1 there (jittered or N-rooks past a grid of a few N); {fix}",
         100.0 * TAIL_WARNING_SHARE,
         dominated.join(", ")
     );

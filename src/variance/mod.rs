@@ -109,6 +109,23 @@ struct Spectrum {
     total: f64,
 }
 
+impl Spectrum {
+    /// The spectrum of per-plane frequency lists, without those below [`NEGLIGIBLE`] of the largest
+    /// `|f̂|²` (left to the tail).
+    fn from_active(planes: Vec<Projection>, mut active: Vec<Vec<(usize, f64, usize)>>) -> Self {
+        let max_w = active.iter().flatten().fold(0.0_f64, |m, e| m.max(e.1));
+        for list in &mut active {
+            list.retain(|e| e.1 > NEGLIGIBLE * max_w);
+        }
+        let total = active.iter().flatten().map(|e| e.1).sum();
+        Spectrum {
+            planes,
+            active,
+            total,
+        }
+    }
+}
+
 /// Largest number of Fourier coefficients evaluated per prediction (grid cells summed over planes).
 const MAX_GRID: usize = 1 << 26;
 
@@ -140,7 +157,6 @@ fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spe
     }
     let dims = f.dims();
     let mut active = Vec::with_capacity(planes.len());
-    let mut max_w: f64 = 0.0;
     for (pi, p) in planes.iter().enumerate() {
         let list: Vec<(usize, f64, usize)> = (0..res * res)
             .into_par_iter()
@@ -170,18 +186,9 @@ fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spe
                     f.name()
                 ))
             })?;
-        max_w = list.iter().fold(max_w, |m, e| m.max(e.1));
         active.push(list);
     }
-    for list in &mut active {
-        list.retain(|e| e.1 > NEGLIGIBLE * max_w);
-    }
-    let total = active.iter().flatten().map(|e| e.1).sum();
-    Ok(Spectrum {
-        planes,
-        active,
-        total,
-    })
+    Ok(Spectrum::from_active(planes, active))
 }
 
 /// The active frequencies of `ĝ` for `g = f ∘ S`, the integrand seen from the pattern of a sheared
@@ -213,7 +220,6 @@ fn pulled_back_spectrum(
         )));
     }
     let mut active = Vec::with_capacity(planes.len());
-    let mut max_w: f64 = 0.0;
     for p in &planes {
         let s = if *p == Projection::XU {
             frame.sx
@@ -245,18 +251,9 @@ fn pulled_back_spectrum(
                 ((k1, k2) != (0, 0) && w > 0.0).then(|| (idx, w, cone_index(k1, k2, cones)))
             })
             .collect();
-        max_w = list.iter().fold(max_w, |m, e| m.max(e.1));
         active.push(list);
     }
-    for list in &mut active {
-        list.retain(|e| e.1 > NEGLIGIBLE * max_w);
-    }
-    let total = active.iter().flatten().map(|e| e.1).sum();
-    Ok(Spectrum {
-        planes,
-        active,
-        total,
-    })
+    Ok(Spectrum::from_active(planes, active))
 }
 
 /// `exp(−2πi k c)` for each `k` of `ks`: runs of consecutive `k` by recurrence, recomputed directly

@@ -139,37 +139,33 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
 /// start, held strata, the solver's limits and the loss's weights. A value given equal to the
 /// default cannot be told from the default and passes.
 fn refuse_solver_flags(args: &OptimizeArgs) -> Result<()> {
-    let mut given: Vec<&str> = Vec::new();
-    if args.init.is_some() {
-        given.push("--init");
-    }
-    if args.latin {
-        given.push("--latin");
-    }
-    if args.exact {
-        given.push("--exact");
-    }
-    if args.eps != DEFAULT_EPS {
-        given.push("--eps");
-    }
-    if args.max_iters != DEFAULT_LIMITS.max_iters {
-        given.push("--max-iters");
-    }
-    if args.max_seconds != DEFAULT_LIMITS.max_seconds {
-        given.push("--max-seconds");
-    }
-    if args.tol != DEFAULT_LIMITS.tol {
-        given.push("--tol");
-    }
-    if args.annular_weight != DEFAULT_ANNULAR_WEIGHT {
-        given.push("--annular-weight");
-    }
-    if args.repulsion_radius != DEFAULT_REPULSION.radius {
-        given.push("--repulsion-radius");
-    }
-    if args.repulsion_weight != DEFAULT_REPULSION.weight {
-        given.push("--repulsion-weight");
-    }
+    let given: Vec<&str> = [
+        (args.init.is_some(), "--init"),
+        (args.latin, "--latin"),
+        (args.exact, "--exact"),
+        (args.eps != DEFAULT_EPS, "--eps"),
+        (args.max_iters != DEFAULT_LIMITS.max_iters, "--max-iters"),
+        (
+            args.max_seconds != DEFAULT_LIMITS.max_seconds,
+            "--max-seconds",
+        ),
+        (args.tol != DEFAULT_LIMITS.tol, "--tol"),
+        (
+            args.annular_weight != DEFAULT_ANNULAR_WEIGHT,
+            "--annular-weight",
+        ),
+        (
+            args.repulsion_radius != DEFAULT_REPULSION.radius,
+            "--repulsion-radius",
+        ),
+        (
+            args.repulsion_weight != DEFAULT_REPULSION.weight,
+            "--repulsion-weight",
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(is_given, flag)| is_given.then_some(flag))
+    .collect();
     if given.is_empty() {
         return Ok(());
     }

@@ -83,6 +83,13 @@ const NEEDS: &[(&str, &str, &str, &str, &str)] = &[
         "it says how --shear shears the sets",
     ),
     (
+        "variance",
+        "shear_mode",
+        "shear",
+        "--shear sx,sy",
+        "it says how --shear shears the sampler's sets",
+    ),
+    (
         "render",
         "shear_mode",
         "shear",

@@ -1505,6 +1505,21 @@ fn flags_that_would_be_ignored_are_refused() {
         ),
         (
             vec![
+                "variance",
+                "--sampler",
+                "padded-mj",
+                "-n",
+                "16",
+                "--integrand",
+                "sheared:s=0.5@xu",
+                "--shear-mode",
+                "wrap",
+            ],
+            "--shear-mode wrap needs --shear sx,sy:",
+            &out,
+        ),
+        (
+            vec![
                 "spectrum",
                 "--sampler",
                 "random",

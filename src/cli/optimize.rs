@@ -77,7 +77,7 @@ pub struct OptimizeArgs {
     #[arg(long, conflicts_with = "eps")]
     pub exact: bool,
     /// NUFFT tolerance for the loss and its gradient, from 1e-12 to 1e-1.
-    #[arg(long, default_value_t = DEFAULT_EPS, allow_negative_numbers = true)]
+    #[arg(long, default_value = "1e-8", allow_negative_numbers = true)]
     pub eps: f64,
     /// Largest number of solver iterations per set.
     #[arg(long, default_value_t = DEFAULT_LIMITS.max_iters)]
@@ -91,7 +91,8 @@ pub struct OptimizeArgs {
     pub tol: f64,
 }
 
-/// The default `--eps`: the NUFFT tolerance of the loss and its gradient.
+/// The default `--eps` (spelled "1e-8" in its `#[arg]` so that `--help` shows it so): the NUFFT
+/// tolerance of the loss and its gradient.
 const DEFAULT_EPS: f64 = 1e-8;
 
 /// The largest `--max-seconds` accepted (about 31 years): a limit, not a schedule.
@@ -274,7 +275,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         "target": target,
         "parameters": {
             "n": args.n, "dims": args.dims, "sets": args.sets, "seed": args.seed,
-            "method": if args.exact { "exact".to_string() } else { format!("nufft eps={}", args.eps) },
+            "method": if args.exact { "exact".to_string() } else { format!("nufft eps={}", crate::error::number(args.eps)) },
             "strata": setup.strata, "repulsion": { "radius": setup.repulsion.radius, "weight": setup.repulsion.weight },
             "limits": setup.limits, "init": setup.init, "latin": setup.latin,
             "annular_weight": setup.annular_weight,

@@ -82,7 +82,8 @@
 //! against it the NUFFT would be ≈ 450× faster.
 //! Tried and not kept that day: fat LTO with one codegen unit (31.2–32.4 ms against 31.9–35.0 ms,
 //! alternating bench binaries: within the noise); an exact DFT that reads the phase table once per
-//! block of 8 output rows instead of once per row (bit-identical, but 310 ms against 237 ms).
+//! block of 8 output rows instead of once per row (bit-identical; 310 ms, under another build's
+//! load, against 237 ms before it: not alternated, so only "not clearly faster").
 
 use anisospec::rng::stream;
 use anisospec::spectrum::nufft::{contract_error, Nufft2d};

@@ -465,10 +465,9 @@ fn widened_hairline_gains_under_oracle_error() {
                 let p = mse_over(h, subject, n, 1.0 + error, &tables, GAIN_REALIZATIONS);
                 let (g, se) = gain(&t, &p);
                 line += &format!(" | vs {} {g:.2}±{se:.2}", h.label());
-                if n == 1024
-                    && h.label() != "xuyv-mj sheared (transported)"
-                    && z_below(&t, &p) <= 3.0
-                {
+                // Every sheared hairline, as documented above (xuyv-mj was left out here without a
+                // word; measured at N = 1024: 2.09–2.79× over it, z ≈ 10 or more).
+                if n == 1024 && z_below(&t, &p) <= 3.0 {
                     failures.push(format!("N={n} error {error:+}: {}", h.label()));
                 }
             }

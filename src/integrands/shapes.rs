@@ -634,12 +634,29 @@ mod tests {
             }
             assert!((s * h * h - g.fourier(&k).unwrap()).norm() < 1e-13);
         }
-        // Both branches of the theta sum agree near the switch.
-        let (a, b) = (
-            Gaussian::new(0.2499, [0.5; 2]).unwrap(),
-            Gaussian::new(0.25, [0.5; 2]).unwrap(),
-        );
-        assert!((a.theta_sum() - b.theta_sum()).abs() < 1e-3);
+        // Both branches of the theta sum, on both sides of the switch at σ = 0.25, against both
+        // series at the same σ: the direct Σ_k exp(−4π²σ²k²) and its Poisson dual
+        // Σ_m exp(−m²/(4σ²)) / (2σ√π) are the same number. (This compared σ = 0.2499 with σ = 0.25
+        // within 1e-3: the sum itself moves 3.3e-4 over that step, so a branch off by 6e-4 passed.)
+        // Here each sum runs to |k|, |m| ≤ 20, where the terms left out are below e^−630; 41 terms
+        // of at most 2 ulp each (exp, product) round to under 100 ulp ≈ 2.2e-14 relative, and 1e-13
+        // leaves ×4 for the library's own term counts and summation order.
+        for sigma in [0.2, 0.2499, 0.25, 0.3] {
+            let direct: f64 = (-20..=20i64)
+                .map(|k| (-4.0 * PI * PI * sigma * sigma * (k * k) as f64).exp())
+                .sum();
+            let dual: f64 = (-20..=20i64)
+                .map(|m| (-((m * m) as f64) / (4.0 * sigma * sigma)).exp())
+                .sum::<f64>()
+                / (2.0 * sigma * PI.sqrt());
+            let t = Gaussian::new(sigma, [0.5; 2]).unwrap().theta_sum();
+            for (name, want) in [("direct", direct), ("dual", dual)] {
+                assert!(
+                    (t - want).abs() < 1e-13 * want,
+                    "σ = {sigma}: theta sum {t} vs {name} series {want}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -2783,3 +2783,14 @@ fn a_negative_pixel_is_named_by_its_flag() {
         &out,
     );
 }
+
+/// A Gaussian narrower than about 1e-162 has σ² = 0 in f64: its variance is 0, not NaN (the Poisson
+/// sum's m = 0 term was 0 / 0).
+#[test]
+fn a_gaussian_whose_width_underflows_has_a_variance_of_0() {
+    let o = anisospec(&["integrands", "--check", "gaussian:sigma=1e-200"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("variance   0.0000000000e0"), "{out}");
+    assert!(!out.to_lowercase().contains("nan"), "{out}");
+}

@@ -2794,3 +2794,36 @@ fn a_gaussian_whose_width_underflows_has_a_variance_of_0() {
     assert!(out.contains("variance   0.0000000000e0"), "{out}");
     assert!(!out.to_lowercase().contains("nan"), "{out}");
 }
+
+/// Samplers that integrate the integrand exactly at every N (a lattice on an edge along its strata)
+/// have every MSE 0, which a log axis cannot show: converge writes its CSV, leaves out the plot and
+/// says so, as compare's report does (it used to fail with exit code 1 after the run, writing
+/// nothing).
+#[test]
+fn converge_with_every_mse_0_writes_its_csv_and_no_plot() {
+    let (dir, csv) = tmp("c.csv");
+    let png = dir.path().join("c.png");
+    let o = anisospec(&[
+        "converge",
+        "--sampler",
+        "lattice",
+        "--integrand",
+        "step:theta=0",
+        "-n",
+        "2,4,16",
+        "--realizations",
+        "4",
+        "-o",
+        csv.to_str().unwrap(),
+        "--plot",
+        png.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(csv.is_file());
+    assert!(!png.exists());
+    assert!(
+        err.contains("no plot written to") && err.contains("every MSE is 0"),
+        "{err}"
+    );
+}

@@ -2827,3 +2827,27 @@ fn converge_with_every_mse_0_writes_its_csv_and_no_plot() {
         "{err}"
     );
 }
+
+/// A `--cache` that is a file is refused before the reference is computed (about 45 s on the
+/// built-in scene), with exit code 2; it used to fail with exit code 1 once the reference was done.
+#[test]
+fn render_refuses_a_cache_that_is_a_file_before_any_work() {
+    let (dir, out) = tmp("r.exr");
+    let cache = dir.path().join("cache");
+    std::fs::write(&cache, "mine").unwrap();
+    for extra in [&[][..], &["--sampler", "sobol", "--spp", "4"][..]] {
+        let mut args = vec![
+            "render",
+            "--cache",
+            cache.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        if extra.is_empty() {
+            args.push("--reference");
+        }
+        args.extend_from_slice(extra);
+        rejects(&args, "is a file, not a folder", &out);
+    }
+    assert_eq!(std::fs::read_to_string(&cache).unwrap(), "mine");
+}

@@ -2851,3 +2851,46 @@ fn render_refuses_a_cache_that_is_a_file_before_any_work() {
     }
     assert_eq!(std::fs::read_to_string(&cache).unwrap(), "mine");
 }
+
+/// Extreme numbers in a scene file and in `--strat-radius` are echoed in short form (`1e300`), not
+/// as 300 digits.
+#[test]
+fn extreme_scene_and_strata_numbers_are_echoed_in_short_form() {
+    let (dir, out) = tmp("o.exr");
+    for (line, needle) in [
+        ("aperture = 1e300", "aperture = 1e300 is out of range"),
+        ("focus = 1e-300", "focus = 1e-300 is out of range"),
+        ("fov = 1e-300", "(fov = 1e-300, aperture = 0.04, focus = 3,"),
+    ] {
+        let scene = dir.path().join("scene.toml");
+        std::fs::write(&scene, format!("width = 8\nheight = 8\n{line}\n")).unwrap();
+        let args = [
+            "oracle",
+            "--scene",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        rejects(&args, needle, &out);
+        let err = String::from_utf8_lossy(&anisospec(&args).stderr).to_string();
+        assert!(!err.contains("0000000000"), "{err}");
+    }
+    let (_dir, table) = tmp("t.npy");
+    rejects(
+        &[
+            "optimize",
+            "--target",
+            "targets/double-wedge.toml",
+            "--dims",
+            "4",
+            "-n",
+            "64",
+            "--strat-radius",
+            "1e300",
+            "-o",
+            table.to_str().unwrap(),
+        ],
+        "radius --strat-radius 1e300 on xy and uv",
+        &table,
+    );
+}

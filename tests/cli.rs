@@ -2783,3 +2783,114 @@ fn a_negative_pixel_is_named_by_its_flag() {
         &out,
     );
 }
+
+/// A Gaussian narrower than about 1e-162 has σ² = 0 in f64: its variance is 0, not NaN (the Poisson
+/// sum's m = 0 term was 0 / 0).
+#[test]
+fn a_gaussian_whose_width_underflows_has_a_variance_of_0() {
+    let o = anisospec(&["integrands", "--check", "gaussian:sigma=1e-200"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("variance   0.0000000000e0"), "{out}");
+    assert!(!out.to_lowercase().contains("nan"), "{out}");
+}
+
+/// Samplers that integrate the integrand exactly at every N (a lattice on an edge along its strata)
+/// have every MSE 0, which a log axis cannot show: converge writes its CSV, leaves out the plot and
+/// says so, as compare's report does (it used to fail with exit code 1 after the run, writing
+/// nothing).
+#[test]
+fn converge_with_every_mse_0_writes_its_csv_and_no_plot() {
+    let (dir, csv) = tmp("c.csv");
+    let png = dir.path().join("c.png");
+    let o = anisospec(&[
+        "converge",
+        "--sampler",
+        "lattice",
+        "--integrand",
+        "step:theta=0",
+        "-n",
+        "2,4,16",
+        "--realizations",
+        "4",
+        "-o",
+        csv.to_str().unwrap(),
+        "--plot",
+        png.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(csv.is_file());
+    assert!(!png.exists());
+    assert!(
+        err.contains("no plot written to") && err.contains("every MSE is 0"),
+        "{err}"
+    );
+}
+
+/// A `--cache` that is a file is refused before the reference is computed (about 45 s on the
+/// built-in scene), with exit code 2; it used to fail with exit code 1 once the reference was done.
+#[test]
+fn render_refuses_a_cache_that_is_a_file_before_any_work() {
+    let (dir, out) = tmp("r.exr");
+    let cache = dir.path().join("cache");
+    std::fs::write(&cache, "mine").unwrap();
+    for extra in [&[][..], &["--sampler", "sobol", "--spp", "4"][..]] {
+        let mut args = vec![
+            "render",
+            "--cache",
+            cache.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        if extra.is_empty() {
+            args.push("--reference");
+        }
+        args.extend_from_slice(extra);
+        rejects(&args, "is a file, not a folder", &out);
+    }
+    assert_eq!(std::fs::read_to_string(&cache).unwrap(), "mine");
+}
+
+/// Extreme numbers in a scene file and in `--strat-radius` are echoed in short form (`1e300`), not
+/// as 300 digits.
+#[test]
+fn extreme_scene_and_strata_numbers_are_echoed_in_short_form() {
+    let (dir, out) = tmp("o.exr");
+    for (line, needle) in [
+        ("aperture = 1e300", "aperture = 1e300 is out of range"),
+        ("focus = 1e-300", "focus = 1e-300 is out of range"),
+        ("fov = 1e-300", "(fov = 1e-300, aperture = 0.04, focus = 3,"),
+    ] {
+        let scene = dir.path().join("scene.toml");
+        std::fs::write(&scene, format!("width = 8\nheight = 8\n{line}\n")).unwrap();
+        let args = [
+            "oracle",
+            "--scene",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        rejects(&args, needle, &out);
+        let err = String::from_utf8_lossy(&anisospec(&args).stderr).to_string();
+        assert!(!err.contains("0000000000"), "{err}");
+    }
+    let (_dir, table) = tmp("t.npy");
+    rejects(
+        &[
+            "optimize",
+            "--target",
+            "targets/double-wedge.toml",
+            "--dims",
+            "4",
+            "-n",
+            "64",
+            "--strat-radius",
+            "1e300",
+            "-o",
+            table.to_str().unwrap(),
+        ],
+        "radius --strat-radius 1e300 on xy and uv",
+        &table,
+    );
+}

@@ -146,11 +146,33 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             );
         }
     }
+    // A log axis has no place for an MSE of 0: with every MSE 0 (samplers that integrate the
+    // integrand exactly at every N) the plot is left out and said so, as in compare's report.
+    let plot_file = args.plot.as_ref().filter(|png| {
+        let drawable = studies
+            .iter()
+            .flat_map(|s| &s.points)
+            .any(|p| p.mse.is_finite() && p.mse > 0.0);
+        if !drawable {
+            eprintln!(
+                "no plot written to {}: every MSE is 0 (the samplers integrate {} exactly at every N), which a log axis cannot show",
+                png.display(),
+                f.name()
+            );
+        }
+        drawable
+    });
+    let outputs: Vec<&std::path::Path> = args
+        .output
+        .iter()
+        .chain(plot_file)
+        .map(PathBuf::as_path)
+        .collect();
     crate::output::write_group(&outputs, |staged| {
         if let Some(out) = &args.output {
             write_csv(&staged(out), &studies)?;
         }
-        if let Some(png) = &args.plot {
+        if let Some(png) = plot_file {
             plot(
                 &staged(png),
                 &studies,

@@ -74,6 +74,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let files = crate::cli::sibling_outputs(&args.output, &["exr", "png"])?;
     let (exr, png) = (&files[0], &files[1]);
     crate::output::check_outputs(&[exr, png], &inputs)?;
+    // The reference is written to the cache once computed (45 s on the built-in scene): a cache path
+    // that is a file is refused before that work, as compare refuses it.
+    crate::output::check_folder(&cache, "--cache", "cache")?;
     let reference_of = |what: &str| {
         let bar = crate::progress::bar(h as u64, what);
         reference_image(&scene, args.ref_count, Some(&cache), &bar)

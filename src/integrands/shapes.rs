@@ -107,8 +107,12 @@ impl Gaussian {
         let s = self.sigma;
         if s < 0.25 {
             let terms = (s * 2.0 * 50f64.sqrt()).ceil() as i64 + 1;
+            // The m = 0 term is 1 exactly; written out, it stays 1 when σ² underflows to 0 (0 / 0).
             (-terms..=terms)
-                .map(|m| (-((m * m) as f64) / (4.0 * s * s)).exp())
+                .map(|m| match m {
+                    0 => 1.0,
+                    _ => (-((m * m) as f64) / (4.0 * s * s)).exp(),
+                })
                 .sum::<f64>()
                 / (2.0 * s * PI.sqrt())
         } else {

@@ -196,7 +196,7 @@ impl Setup {
             .map_err(|e| match e {
                 Error::Usage(m) | Error::Input(m) => Error::Input(format!(
                     "the 4D strata term (a blue-noise disc of radius --strat-radius {} on xy and uv): {m}; or drop the term with --strat-weight 0",
-                    self.strata.radius
+                    crate::error::number(self.strata.radius)
                 )),
                 other => other,
             })

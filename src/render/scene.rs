@@ -7,7 +7,7 @@
 //! high-frequency texture. No acceleration structure: every ray tests the room and the three boxes.
 
 use super::camera::Camera;
-use crate::error::{Error, Result};
+use crate::error::{number, Error, Result};
 use crate::points::shear::MAX_SHEAR;
 use glam::DVec3;
 use std::path::Path;
@@ -134,7 +134,8 @@ impl SceneConfig {
                 Ok(())
             } else {
                 Err(format!(
-                    "{key} = {v} is out of range; it must lie in ({lo}, {hi})"
+                    "{key} = {} is out of range; it must lie in ({lo}, {hi})",
+                    number(v)
                 ))
             }
         };
@@ -151,7 +152,7 @@ impl SceneConfig {
         if !(self.aperture.is_finite() && (0.0..1.0).contains(&self.aperture)) {
             return Err(format!(
                 "aperture = {} is out of range; it must lie in [0, 1) world units (0 is a pinhole)",
-                self.aperture
+                number(self.aperture)
             ));
         }
         let free = |p: DVec3| {
@@ -169,7 +170,8 @@ impl SceneConfig {
             return Err(format!(
                 "position = {:?} with aperture = {} puts the lens outside free space; the whole lens \
                  must be inside the room (-1 < x < 1, -1 < y < 1, -1 < z < 6) and outside the three boxes",
-                self.position, self.aperture
+                self.position,
+                number(self.aperture)
             ));
         }
         let bound = self.shear_bound();
@@ -179,7 +181,11 @@ impl SceneConfig {
                  shear of magnitude up to {bound:.3e} pixels per lens width on a pixel, beyond the largest \
                  supported shear {MAX_SHEAR:e}; widen fov, make aperture smaller, move focus towards the \
                  scene's depths, or move position away from the walls and boxes (the defaults are fov = 33.4, aperture = 0.04, focus = 3)",
-                self.fov, self.aperture, self.focus, self.height, self.position
+                number(self.fov),
+                number(self.aperture),
+                number(self.focus),
+                self.height,
+                self.position
             ));
         }
         Ok(())

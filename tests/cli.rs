@@ -148,6 +148,25 @@ fn bad_sampler_and_n_are_rejected() {
         "49",
         &out,
     );
+    // Dart throwing and Lloyd relaxation cost more than linearly in N: capped, not left to run for hours.
+    let above = (anisospec::samplers::disk::DISK_MAX_N + 1).to_string();
+    for name in ["poisson", "blue", "padded-blue"] {
+        rejects(
+            &[
+                "sample",
+                "--sampler",
+                name,
+                "--dims",
+                if name.starts_with("padded") { "4" } else { "2" },
+                "-n",
+                &above,
+                "-o",
+                o,
+            ],
+            &anisospec::samplers::disk::DISK_MAX_N.to_string(),
+            &out,
+        );
+    }
 }
 
 #[test]

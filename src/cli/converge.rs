@@ -152,7 +152,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         let drawable = studies
             .iter()
             .flat_map(|s| &s.points)
-            .any(|p| p.mse.is_finite() && p.mse > 0.0);
+            .any(|p| crate::compare::report::drawable(p.mse));
         if !drawable {
             eprintln!(
                 "no plot written to {}: every MSE is 0 (the samplers integrate {} exactly at every N), which a log axis cannot show",

@@ -89,7 +89,7 @@ pub fn write(
 }
 
 /// Whether an MSE can be drawn on a log axis: finite and above 0.
-fn drawable(mse: f64) -> bool {
+pub(crate) fn drawable(mse: f64) -> bool {
     mse.is_finite() && mse > 0.0
 }
 

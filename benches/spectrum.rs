@@ -84,6 +84,37 @@
 //! alternating bench binaries: within the noise); an exact DFT that reads the phase table once per
 //! block of 8 output rows instead of once per row (bit-identical; 310 ms, under another build's
 //! load, against 237 ms before it: not alternated, so only "not clearly faster").
+//!
+//! A machine without AVX-512 (AMD EPYC family 25, Zen 3, 512 KB L2 per core; 2026-11-26). The
+//! host's speed drifts by up to 1.5× within a minute, so criterion's groups, run one after the other,
+//! cannot be divided (`expected_spectrum` 73–95 ms by hand and 78–114 ms through the library in
+//! separate runs, one exact realization 506–795 ms). Measured in alternation instead (8 rounds in
+//! one process, each one exact realization, then 100 `power` calls, then the library's expected
+//! spectrum of the same sets): `power` 0.72–1.17 ms per realization, library 0.81–1.28 ms, exact
+//! 664–995 ms; per round the NUFFT was 814–972× faster than the exact DFT by hand (median 913×)
+//! and 702–881× through the library (median 796×). The exact DFT loses more than the NUFFT without
+//! AVX-512, so the ratio is higher here than on the machine above. Profile of `power`
+//! (perf, cpu-clock samples): spreading 47 %, the row stage's packing and separation with the
+//! power rows 15–17 %, rustfft 27 %, zeroing 4 %. Tried and not kept: spreading band by band (the
+//! padded grid's rows cut into bands of 256 KB, each band's points listed in increasing order by a
+//! counting sort, so every grid entry still receives its terms in point order: the same bits on 20
+//! cases of N, K and eps). Spreading's share went from 47.6 % to 45.5 % plus 6.6 % for the sort, and
+//! `power` took 0.77–1.05 ms against 0.68–1.03 ms for the old binary (alternated): the grid not
+//! fitting this core's L2 is not what limits it.
+//!
+//! What 1000× would take (operation counts per realization at eps = 1e-6: σ = 1.25, n = 320,
+//! w = 14, kernel polynomials of degree 10). Spreading: 2 × 14 × 10 fused multiply-adds per point
+//! for the kernel values and 14 × 14 for the grid, 4096 × 476 × 2 ≈ 3.9 Mflop. FFTs: 289 complex
+//! transforms of length 320 (160 of packed row pairs, 129 columns), 2.5–3.9 Mflop (4 n log2 n − 6n
+//! to 5 n log2 n each). Separation and power rows ≈ 0.3 Mflop. In all 6.7–8.1 Mflop, against
+//! 2.15 Gflop for the exact DFT (one complex multiply-add, 8 flop, per point and bin; 1.07 Gflop if
+//! it used P(k) = P(−k)). So at equal flop rates the NUFFT would be 270–320× faster; the measured
+//! ≈ 780× on the AVX-512 machine means it already runs at 2.5–2.9 times the exact DFT's flop rate
+//! (≈ 25 against 9.1 Gflop/s). 1000× needs 0.236 ms per realization there, i.e. 28–34 Gflop/s,
+//! 3.1–3.7 times the exact DFT's rate, with half the work in scattered read-modify-writes of the
+//! grid. Against an exact DFT written as phase tables and one dense complex matrix product (numpy
+//! with OpenBLAS, 1.7× faster than ours, above), 1000× would need 5.3–6.3 times that reference's
+//! flop rate. The ratio says as much about the reference's speed as about the NUFFT's.
 
 use anisospec::rng::stream;
 use anisospec::spectrum::nufft::{contract_error, Nufft2d};

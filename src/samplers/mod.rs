@@ -265,10 +265,16 @@ fn pairing_parts(name: &str) -> Option<(&'static str, &str)> {
 }
 
 /// For the 2D name inside `padded-NAME` / `xuyv-NAME`: empty if it is a 2D sampler, else a clause
-/// saying it is not one, with the closest 2D name and the list.
+/// saying it is not one: a pairing itself (pairings do not nest), or with the closest 2D name and
+/// the list.
 fn unknown_inner(inner: &str) -> String {
     if build_2d(inner).is_some() {
         return String::new();
+    }
+    if pairing_parts(inner).is_some() {
+        return format!(
+            "; and '{inner}' is already a 4D pairing, which does not nest: write '{inner}' alone"
+        );
     }
     let closest = NAMES_2D
         .iter()
@@ -413,6 +419,8 @@ mod tests {
         );
         let m = msg("padded-nosuch", 4);
         assert!(m.contains("padded-NAME needs a 2D sampler"), "{m}");
+        let m = msg("padded-xuyv-mj", 4);
+        assert!(m.contains("write 'xuyv-mj' alone"), "{m}");
         assert!(build("padded-mj", 4).is_ok());
     }
 

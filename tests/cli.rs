@@ -528,11 +528,17 @@ fn projection_must_fit_dimensions() {
 
 #[test]
 fn bad_point_files_are_rejected_and_left_untouched() {
-    let cases: [(&str, &str, &str); 5] = [
+    let cases: [(&str, &str, &str); 7] = [
         ("empty.txt", "", "no points"),
         ("garbage.txt", "0.1 0.2\n0.3 oops\n", "not a number"),
         ("ragged.txt", "0.1 0.2\n0.3\n", "coordinates"),
         ("nan.txt", "0.1 0.2\nNaN 0.5\n", "finite"),
+        ("inf.txt", "0.1 0.2\n-inf 0.5\n", "is -inf"),
+        (
+            "huge.txt",
+            "0.1 0.2\n0.5 1e400\n",
+            "line 2: '1e400' is beyond the range",
+        ),
         ("range.txt", "0.1 0.2\n1.5 0.5\n", "[0, 1)"),
     ];
     for (name, content, needle) in cases {

@@ -274,12 +274,22 @@ fn parse_text(mut reader: impl BufRead, limit: usize) -> Result<PointSets> {
         let coords: Vec<f64> = line
             .split_whitespace()
             .map(|t| {
-                t.parse::<f64>().map_err(|_| {
+                let c = t.parse::<f64>().map_err(|_| {
                     Error::Input(format!(
                         "line {}: '{t}' is not a number; each line holds one point's coordinates separated by spaces",
                         line_no + 1
                     ))
-                })
+                })?;
+                // A finite spelling such as 1e400 that overflows (an explicit inf is left to the
+                // range check, which names the point).
+                let spelt_infinite = t.trim_start_matches(['+', '-']).to_ascii_lowercase().starts_with("inf");
+                if c.is_infinite() && !spelt_infinite {
+                    return Err(Error::Input(format!(
+                        "line {}: '{t}' is beyond the range of a 64-bit float (it reads as infinity); coordinates lie in [0, 1)",
+                        line_no + 1
+                    )));
+                }
+                Ok(c)
             })
             .collect::<Result<_>>()?;
         match dims {

@@ -281,9 +281,13 @@ fn parse_text(mut reader: impl BufRead, limit: usize) -> Result<PointSets> {
                     ))
                 })?;
                 // A finite spelling such as 1e400 that overflows (an explicit inf is left to the
-                // range check, which names the point).
-                let spelt_infinite = t.trim_start_matches(['+', '-']).to_ascii_lowercase().starts_with("inf");
-                if c.is_infinite() && !spelt_infinite {
+                // range check, which names the point). The spelling is looked at only for an
+                // infinite value, so ordinary coordinates cost one comparison.
+                let spelt_infinite = || {
+                    let digits = t.trim_start_matches(['+', '-']);
+                    digits.get(..3).is_some_and(|p| p.eq_ignore_ascii_case("inf"))
+                };
+                if c.is_infinite() && !spelt_infinite() {
                     return Err(Error::Input(format!(
                         "line {}: '{t}' is beyond the range of a 64-bit float (it reads as infinity); coordinates lie in [0, 1)",
                         line_no + 1

@@ -115,8 +115,8 @@
 //! it used P(k) = P(−k)). So at equal flop rates the NUFFT would be 270–320× faster; the measured
 //! ≈ 780× on the AVX-512 machine means it already runs at 2.5–2.9 times the exact DFT's flop rate
 //! (≈ 25 against 9.1 Gflop/s). 1000× needs 0.236 ms per realization there, i.e. 28–34 Gflop/s,
-//! 3.1–3.7 times the exact DFT's rate, with half the work in scattered read-modify-writes of the
-//! grid. Against an exact DFT written as phase tables and one dense complex matrix product (numpy
+//! 3.1–3.7 times the exact DFT's rate, with half the work in spreading, whose grid updates are
+//! scattered read-modify-writes. Against an exact DFT written as phase tables and one dense complex matrix product (numpy
 //! with OpenBLAS, 1.7× faster than ours, above), 1000× would need 5.3–6.3 times that reference's
 //! flop rate. The ratio says as much about the reference's speed as about the NUFFT's.
 

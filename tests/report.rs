@@ -623,8 +623,9 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
         assert!(values.iter().all(|v| v.is_finite() && *v >= 0.0), "{label}");
         for projection in values.chunks_exact(k * k) {
             let dc = projection[k / 2 * k + k / 2];
+            // The gallery's NUFFT (eps = 1e-6) promises a relative error of P within 10 eps.
             assert!(
-                (dc / SPECTRA_N as f64 - 1.0).abs() < 1e-6,
+                (dc / SPECTRA_N as f64 - 1.0).abs() <= 1e-5,
                 "{label}: P(0) = {dc}"
             );
         }

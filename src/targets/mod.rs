@@ -754,6 +754,7 @@ fn read_npy_image(path: &Path, bad: &dyn Fn(String) -> Error) -> Result<(Vec<f64
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::{PI, SQRT_2};
 
     #[test]
     fn parse_rejects_bad_files() {
@@ -835,9 +836,17 @@ mod tests {
         let t = Target::parse("kind = \"blue-noise\"\nradius = 0.5\n").unwrap();
         for n in [256, 1024, 4096] {
             let g = t.grid(n).unwrap();
-            let frac = g.dark_cells as f64 / n as f64;
-            // π ρ² = 0.785; lattice counting error shrinks with N.
-            assert!((frac - 0.785).abs() < 0.1, "n={n}: {frac}");
+            // The dark cells are the k ≠ 0 with |k| < R = 0.5 sqrt(N). Unit squares centred on the
+            // lattice points inside the disc cover the disc of radius R − √2/2 and lie within the one
+            // of radius R + √2/2, so their count (with k = 0) is π R² within π (√2 R + 1/2).
+            let r = 0.5 * (n as f64).sqrt();
+            let count = g.dark_cells as f64 + 1.0;
+            let bound = PI * (SQRT_2 * r + 0.5);
+            assert!(
+                (count - PI * r * r).abs() <= bound,
+                "n={n}: {count} cells against π R² = {:.1} ± {bound:.1}",
+                PI * r * r
+            );
         }
         let too_dark = Target::parse("kind = \"blue-noise\"\nradius = 2\n").unwrap();
         let e = too_dark.grid(256).unwrap_err().to_string();

@@ -28,6 +28,54 @@ pub struct Reference {
     pub stderr: f64,
 }
 
+/// Owen scramblings of the Sobol set [`estimate_mean_square`] averages over: their spread gives the
+/// standard error.
+const MEAN_SQUARE_SCRAMBLES: u32 = 32;
+/// Points per scrambling in [`estimate_mean_square`]: `2^16`, so `2^21` evaluations in all.
+const MEAN_SQUARE_POINTS: u32 = 1 << 16;
+
+/// `∫f²` over `[0,1)^D`, with its standard error: [`Integrand::mean_square`] (standard error 0) where
+/// it is known in closed form, otherwise [`estimate_mean_square`].
+pub fn mean_square_reference(f: &dyn Integrand) -> Reference {
+    match f.mean_square() {
+        Some(value) => Reference { value, stderr: 0.0 },
+        None => estimate_mean_square(f),
+    }
+}
+
+/// `∫f²` over `[0,1)^D` by randomized quasi-Monte Carlo: the mean of `f²` over
+/// [`MEAN_SQUARE_SCRAMBLES`] independent Owen scramblings (`sobol_burley`, fixed seeds) of a Sobol
+/// set of [`MEAN_SQUARE_POINTS`] points, with the standard error of that mean from their spread. The
+/// same bits on every run and thread count. For a sum of overlapping shapes, whose cross terms
+/// `∫f_i f_j` have no closed form here.
+pub fn estimate_mean_square(f: &dyn Integrand) -> Reference {
+    use rayon::prelude::*;
+    let dims = f.dims();
+    let means: Vec<f64> = (0..MEAN_SQUARE_SCRAMBLES)
+        .into_par_iter()
+        .map(|seed| {
+            let mut x = [0.0; 4];
+            let sum: f64 = (0..MEAN_SQUARE_POINTS)
+                .map(|i| {
+                    let p = sobol_burley::sample_4d(i, 0, seed);
+                    for (xd, pd) in x.iter_mut().zip(p) {
+                        *xd = f64::from(pd);
+                    }
+                    f.eval(&x[..dims]).powi(2)
+                })
+                .sum();
+            sum / f64::from(MEAN_SQUARE_POINTS)
+        })
+        .collect();
+    let r = means.len() as f64;
+    let value = means.iter().sum::<f64>() / r;
+    let spread = means.iter().map(|m| (m - value).powi(2)).sum::<f64>() / (r - 1.0);
+    Reference {
+        value,
+        stderr: (spread / r).sqrt(),
+    }
+}
+
 /// A function on the unit torus `[0,1)^D` (`D` 2 or 4; in 4D the coordinates are `x, y, u, v`).
 pub trait Integrand: Send + Sync {
     /// A short description with its parameters, e.g. `step:theta=30`.
@@ -76,5 +124,46 @@ pub trait Integrand: Send + Sync {
     /// realization" option. `None` when the family has nothing to move.
     fn placed(&self, _rng: &mut Rng) -> Option<Box<dyn Integrand>> {
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The randomized-QMC `∫f²` agrees with every closed form within 4 of its standard errors
+    /// (measured: 2e-7 to 3e-5, relative 3e-6 to 5e-4).
+    #[test]
+    fn estimated_mean_square_meets_the_closed_forms() {
+        for spec in [
+            "disc:r=0.3,cx=0.4",
+            "step:theta=30,c=0.6",
+            "gaussian:sigma=0.1",
+            "fan:s0=0.3,s1=0.7@xu",
+            "sheared:s=0.5@xu*disc:r=0.2@yv",
+        ] {
+            let f = parse(spec).unwrap();
+            let exact = f.mean_square().unwrap();
+            let e = estimate_mean_square(f.as_ref());
+            eprintln!("{spec}: {exact:.8e} vs {:.8e} ± {:.1e}", e.value, e.stderr);
+            assert!(e.stderr > 0.0, "{spec}: {e:?}");
+            assert!((e.value - exact).abs() <= 4.0 * e.stderr, "{spec}: {e:?}");
+        }
+    }
+
+    /// Two overlapping steps, one across x and one across y: the sum has no closed-form `∫f²`, but
+    /// the steps are independent, so `Var(f) = 0.7·0.3 + 0.4·0.6 = 0.45`.
+    #[test]
+    fn overlapping_sum_gets_an_estimated_mean_square() {
+        let f = parse("step:c=0.3+step:theta=90,c=0.6").unwrap();
+        assert_eq!(f.mean_square(), None);
+        let m = mean_square_reference(f.as_ref());
+        let var = m.value - f.reference().value.powi(2);
+        assert!(m.stderr > 0.0);
+        assert!((var - 0.45).abs() <= 4.0 * m.stderr, "{var} ± {}", m.stderr);
+        let disc = parse("disc:r=0.3").unwrap();
+        let exact = mean_square_reference(disc.as_ref());
+        assert_eq!(exact.stderr, 0.0);
+        assert_eq!(Some(exact.value), disc.mean_square());
     }
 }

@@ -19,7 +19,7 @@
 use crate::converge::{check_plan, fit_power_law, SlopeFit};
 use crate::error::{Error, Result};
 use crate::integrands::sampled::sampled_power;
-use crate::integrands::Integrand;
+use crate::integrands::{mean_square_reference, Integrand};
 use crate::points::shear::shear_pair;
 use crate::points::{project, Projection};
 use crate::rng;
@@ -60,13 +60,18 @@ pub struct VariancePoint {
     pub res: usize,
     /// Predicted variance: `grid + tail`.
     pub variance: f64,
-    /// Standard error of `variance` (from the realizations; the tail is taken as exact).
+    /// Standard error of `variance`: the realizations' spread, and the tail's standard error where
+    /// `∫f²` is estimated.
     pub stderr: f64,
     /// The sum over the frequency grid.
     pub grid: f64,
     /// The part beyond the grid (and below the `|f̂|²` threshold), estimated as
-    /// `(Var(f) − Σ_grid |f̂|²) / N`: white noise (`E[P] = 1`) there. `None` when `∫f²` is unknown.
-    pub tail: Option<f64>,
+    /// `(Var(f) − Σ_grid |f̂|²) / N`: white noise (`E[P] = 1`) there. `Var(f) = ∫f² − (∫f)²` in
+    /// closed form where the integrand has it, else with `∫f²` by randomized QMC
+    /// ([`crate::integrands::mean_square_reference`]).
+    pub tail: f64,
+    /// Standard error of `tail`: 0 when `∫f²` and `∫f` are exact.
+    pub tail_stderr: f64,
     /// The grid sum split by directional cone (sums to `grid`).
     pub cones: Vec<f64>,
     /// Standard error of each cone's share.
@@ -75,11 +80,9 @@ pub struct VariancePoint {
 
 impl VariancePoint {
     /// The tail's share of the predicted variance (`tail / variance`, a fraction in [0, 1]); `None`
-    /// when the tail is unknown or the prediction is zero.
+    /// when the prediction is zero.
     pub fn tail_share(&self) -> Option<f64> {
-        self.tail
-            .filter(|_| self.variance > 0.0)
-            .map(|t| t / self.variance)
+        (self.variance > 0.0).then(|| self.tail / self.variance)
     }
 }
 
@@ -333,6 +336,11 @@ fn check_config(cfg: &VarianceConfig) -> Result<()> {
         ));
     }
     crate::spectrum::profiles::check_cones(cfg.cones)?;
+    if cfg.res_per_n == Some(0) {
+        return Err(Error::Usage(
+            "--res-per-n 0 grows no grid (K = max(--res, 0·N) = --res); give M = 1 or more, e.g. --res-per-n 4, or leave the flag out".into(),
+        ));
+    }
     Ok(())
 }
 
@@ -464,7 +472,11 @@ pub fn predict(
     }
     let pattern = frame.as_ref().map_or(sampler, |fr| fr.pattern);
     let planes = f.spectral_planes().unwrap_or_default();
-    let var_f = f.mean_square().map(|m| m - f.reference().value.powi(2));
+    let (mean_square, integral) = (mean_square_reference(f), f.reference());
+    let var_f = mean_square.value - integral.value.powi(2);
+    let var_f_stderr = mean_square
+        .stderr
+        .hypot(2.0 * integral.value * integral.stderr);
     let mut points = Vec::with_capacity(ns.len());
     // Per N, the relative error of each realization's values ([`relative_error`]).
     let mut rho = Vec::with_capacity(ns.len());
@@ -485,15 +497,17 @@ pub fn predict(
         let (grid, stderr) = (per.total.mean(), per.total.stderr());
         let cones = per.cones.iter().map(Welford::mean).collect();
         let cone_stderr = per.cones.iter().map(Welford::stderr).collect();
-        let tail = var_f.map(|v| (v - spec.total).max(0.0) / n as f64);
+        let tail = (var_f - spec.total).max(0.0) / n as f64;
+        let tail_stderr = var_f_stderr / n as f64;
         rho.push(relative_error(spec, res, n, cfg.method));
         points.push(VariancePoint {
             n,
             res,
-            variance: grid + tail.unwrap_or(0.0),
-            stderr,
+            variance: grid + tail,
+            stderr: stderr.hypot(tail_stderr),
             grid,
             tail,
+            tail_stderr,
             cones,
             cone_stderr,
         });
@@ -531,7 +545,7 @@ pub fn predict(
 }
 
 /// Writes a prediction as CSV (atomically): `n, variance, stderr, grid, tail`, then `cone_c` and
-/// `cone_c_stderr` for every cone; an unknown tail is left empty.
+/// `cone_c_stderr` for every cone.
 pub fn write_csv(path: &std::path::Path, pred: &VariancePrediction) -> Result<()> {
     use std::io::Write;
     let cones = pred.points.first().map_or(0, |p| p.cones.len());
@@ -554,7 +568,7 @@ pub fn write_csv(path: &std::path::Path, pred: &VariancePrediction) -> Result<()
                 format!("{:e}", p.variance),
                 format!("{:e}", p.stderr),
                 format!("{:e}", p.grid),
-                p.tail.map_or(String::new(), |t| format!("{t:e}")),
+                format!("{:e}", p.tail),
             ];
             for c in 0..cones {
                 row.push(format!("{:e}", p.cones[c]));

@@ -717,7 +717,7 @@ fn sizes_above_the_coordinate_limit_are_refused_at_once() {
     for (command, file) in huge {
         let mut args: Vec<&str> = command.split_whitespace().collect();
         args.extend(["-o", file.to_str().unwrap()]);
-        rejects_in_small_memory(&args, "smaller N or fewer sets", file);
+        rejects_in_small_memory(&args, "use a smaller N", file);
     }
 }
 
@@ -1255,6 +1255,27 @@ fn gallery_refuses_a_file_as_its_folder() {
     );
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "keep");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}
+
+/// `gallery` checks its realizations and every sampler's N before it makes a folder: bad input leaves
+/// no folder behind, nested or not, and an N too large for memory is told to shrink (gallery has no
+/// --sets to lower).
+#[test]
+fn gallery_checks_before_it_makes_a_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let nested = dir.path().join("g/x/y");
+    let out = nested.to_str().unwrap();
+    rejects(
+        &["gallery", "--out", out, "-n", "16", "--realizations", "0"],
+        "--realizations 0 averages nothing",
+        &dir.path().join("g"),
+    );
+    let huge = ["gallery", "--out", out, "-n", "999999999", "--res", "16"];
+    let o = anisospec(&huge);
+    refused(&o, &huge, "use a smaller N", &dir.path().join("g"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("sets"), "{err}");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
 
 /// Sampler names that are empty, a `table:` without a path, and a 4D pairing asked in 2D each get a
@@ -2055,7 +2076,7 @@ fn counts_must_be_positive_and_distinct() {
     let o = out.to_str().unwrap();
     let csv = out.with_extension("csv");
     let c = csv.to_str().unwrap();
-    let cases: [(Vec<&str>, &str, &Path); 7] = [
+    let cases: [(Vec<&str>, &str, &Path); 8] = [
         (
             vec!["sample", "--sampler", "mj", "-n", "-5", "-o", o],
             "a point count must be a positive integer (1 or more), not -5",
@@ -2119,6 +2140,23 @@ fn counts_must_be_positive_and_distinct() {
                 c,
             ],
             "-n lists 16 twice",
+            &csv,
+        ),
+        (
+            vec![
+                "variance",
+                "--sampler",
+                "mj",
+                "--integrand",
+                "disc",
+                "-n",
+                "16",
+                "--res-per-n",
+                "0",
+                "-o",
+                c,
+            ],
+            "--res-per-n 0 grows no grid",
             &csv,
         ),
     ];
@@ -2509,14 +2547,14 @@ fn compare_refuses_an_n_near_usize_max_before_searching() {
         std::fs::write(&config, format!("ns = {ns}\n")).unwrap();
         rejects(
             &["compare", "--config", c, "--out", o],
-            "ns: N × sets × D = 18446744073709551615 × 1 × 4",
+            "ns: N × D = 18446744073709551615 × 4",
             &out,
         );
     }
     std::fs::write(&config, "spectra_n = 18446744073709551615\n").unwrap();
     rejects(
         &["compare", "--config", c, "--out", o],
-        "spectra_n = 18446744073709551615: N × sets × D",
+        "spectra_n = 18446744073709551615: N × D",
         &out,
     );
 }

@@ -85,19 +85,31 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
         )));
     }
     crate::stats::check_realizations("--realizations", args.realizations)?;
-    crate::output::check_folder(&args.out, "--out", "gallery")?;
+    if args.realizations == 0 {
+        return Err(Error::Usage(
+            "--realizations 0 averages nothing; give at least 1 (2 or more for standard errors), e.g. --realizations 64".into(),
+        ));
+    }
     let method = Method::nufft(args.eps)?;
+    // Every sampler's N is checked before the folder is made: bad input leaves nothing behind.
+    crate::points::coordinate_count(1, args.n, 4).map_err(Error::Usage)?;
+    let jobs: Vec<(&str, usize, Projection)> = GALLERY_2D
+        .iter()
+        .map(|&s| (s, 2, Projection::XY))
+        .chain(GALLERY_4D.iter().map(|&s| (s, 4, Projection::XU)))
+        .collect();
+    for &(name, dims, _) in &jobs {
+        let sampler = samplers::build(name, dims)?;
+        samplers::validate_n(sampler.as_ref(), usable_n(sampler.as_ref(), args.n))?;
+    }
+    crate::output::check_folder(&args.out, "--out", "gallery")?;
     let gallery = args.out.join("gallery");
     crate::output::check_report_folder(&gallery, GALLERY_MARKER)?;
     // The whole gallery or nothing: a failure leaves an earlier one as it was.
     write_folder(&gallery, GALLERY_MARKER, |dir| {
         let mut rows = Vec::new();
         let mut spectra = Vec::new();
-        let jobs = GALLERY_2D
-            .iter()
-            .map(|&s| (s, 2, Projection::XY))
-            .chain(GALLERY_4D.iter().map(|&s| (s, 4, Projection::XU)));
-        for (name, dims, proj) in jobs {
+        for &(name, dims, proj) in &jobs {
             let sampler = samplers::build(name, dims)?;
             let n = usable_n(sampler.as_ref(), args.n);
             let started = std::time::Instant::now();

@@ -195,7 +195,7 @@ fn is_staging(name: &std::ffi::OsStr) -> bool {
 /// during the run included), and links are removed, never followed. An earlier report from before the
 /// manifest (its `marker` and no manifest) has its files replaced but none pruned. The caller checks
 /// `dest` with [`check_report_folder`] before any work. On a failure before the move none of `dest`'s
-/// files is touched, `dest` itself goes again if this call created it, and an error names the final
+/// files is touched, `dest` and the ancestors this call created go again (while empty), and an error names the final
 /// path, not the temporary one. The manifest lists the earlier and the new files while they move, so
 /// a failure while moving or pruning leaves new files beside old ones, all of which the next report
 /// can replace.
@@ -204,7 +204,12 @@ pub fn write_folder<T>(
     marker: ReportMarker,
     write: impl FnOnce(&Path) -> Result<T>,
 ) -> Result<T> {
-    let created = !dest.exists();
+    // The folders this call makes (dest and its missing ancestors), innermost first.
+    let created: Vec<PathBuf> = dest
+        .ancestors()
+        .take_while(|a| !a.as_os_str().is_empty() && a.symlink_metadata().is_err())
+        .map(Path::to_path_buf)
+        .collect();
     let result = staging_folder(dest).and_then(|staging| {
         let value =
             write(staging.path()).map_err(|e| e.with_path_replaced(staging.path(), dest))?;
@@ -221,9 +226,11 @@ pub fn write_folder<T>(
         write_manifest(dest, written.iter())?;
         Ok(value)
     });
-    if result.is_err() && created {
-        // Only an empty folder goes; a failure to remove it changes nothing.
-        let _ = std::fs::remove_dir(dest);
+    if result.is_err() {
+        // Only empty folders go; a failure to remove one changes nothing.
+        for folder in &created {
+            let _ = std::fs::remove_dir(folder);
+        }
     }
     result
 }
@@ -666,6 +673,13 @@ mod tests {
             !report.exists(),
             "a folder this call created is left behind"
         );
+        // Its missing ancestors go too.
+        let nested = dir.path().join("a/b/report");
+        let failed = write_folder(&nested, MARK, |_| {
+            Err::<(), _>(Error::Numerical("the plot failed".into()))
+        });
+        assert!(failed.is_err());
+        assert!(!dir.path().join("a").exists(), "an ancestor is left behind");
 
         std::fs::create_dir_all(report.join("plots")).unwrap();
         std::fs::write(report.join("a.md"), "# a report").unwrap();

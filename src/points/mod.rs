@@ -30,8 +30,17 @@ pub fn coordinate_count(sets: usize, n: usize, dims: usize) -> std::result::Resu
             };
             let count = total.map_or_else(|| format!("{approx:.2e}"), |c| c.to_string());
             let gib = |c: f64| c * 8.0 / f64::from(1u32 << 30);
+            // One set at a time (a spectrum, a gallery): only N can shrink.
+            let (product, fix) = if sets == 1 {
+                (format!("N × D = {n} × {dims}"), "use a smaller N")
+            } else {
+                (
+                    format!("N × sets × D = {n} × {sets} × {dims}"),
+                    "use a smaller N or fewer sets",
+                )
+            };
             Err(format!(
-                "N × sets × D = {n} × {sets} × {dims} = {count} coordinates ({} GiB) is above the limit of {MAX_COORDINATES} ({} GiB); use a smaller N or fewer sets",
+                "{product} = {count} coordinates ({} GiB) is above the limit of {MAX_COORDINATES} ({} GiB); {fix}",
                 short(gib(approx)),
                 gib(MAX_COORDINATES as f64)
             ))

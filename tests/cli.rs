@@ -1819,6 +1819,61 @@ fn optimize_refuses_no_sets_before_any_work() {
     }
 }
 
+/// The C header's first line is the whole command: run again (to another file), it makes the same
+/// table, bit for bit, with the flags that change a table (--init, --latin, --max-iters, a loss
+/// weight, --eps) given away from their defaults.
+#[test]
+fn c_header_names_the_command_that_makes_the_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = dir.path().join("first.npy");
+    let o = anisospec(&[
+        "optimize",
+        "--target",
+        "targets/blue-noise.toml",
+        "-n",
+        "16",
+        "--seed",
+        "3",
+        "--init",
+        "mj",
+        "--latin",
+        "--max-iters",
+        "4",
+        "--annular-weight",
+        "0.5",
+        "--eps",
+        "1e-6",
+        "-o",
+        first.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let header = std::fs::read_to_string(dir.path().join("first.h")).unwrap();
+    let line = header.lines().next().unwrap();
+    let command = line
+        .strip_prefix("/* anisospec ")
+        .and_then(|l| l.strip_suffix(" */"))
+        .unwrap_or_else(|| panic!("not a command: {line}"));
+    for flag in [
+        "--init mj",
+        "--latin",
+        "--max-iters 4",
+        "--annular-weight 0.5",
+        "--eps 1e-6",
+    ] {
+        assert!(command.contains(flag), "{flag} missing from {command}");
+    }
+    let again = dir.path().join("again.npy");
+    let mut args: Vec<&str> = command.split_whitespace().collect();
+    let o_flag = args.iter().position(|a| *a == "-o").unwrap();
+    args[o_flag + 1] = again.to_str().unwrap();
+    let o = anisospec(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read(&first).unwrap(),
+        std::fs::read(&again).unwrap()
+    );
+}
+
 /// Two optimized tables' C headers can be included in one C file (and each twice): the include guard,
 /// the macros and the array are named after the file, `anisospec_` and its stem as a C identifier.
 #[test]

@@ -1,7 +1,7 @@
 //! `anisospec optimize`: point sets whose spectra meet a target, written as tables (npy, text, C
 //! header) with a JSON sidecar and a CSV log.
 
-use crate::error::{Error, Result};
+use crate::error::{number, Error, Result};
 use crate::optimize::{
     self, lattice_design, loss::Repulsion, metrics, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
     DEFAULT_LIMITS, DEFAULT_REPULSION, DEFAULT_STRATA,
@@ -121,13 +121,13 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
     {
         return Err(Error::Usage(format!(
             "--max-seconds {}: give a positive number of seconds, at most {MAX_SECONDS:e}",
-            crate::error::number(args.max_seconds)
+            number(args.max_seconds)
         )));
     }
     if !(args.tol.is_finite() && args.tol >= 0.0) {
         return Err(Error::Usage(format!(
             "--tol {}: give a finite number >= 0",
-            crate::error::number(args.tol)
+            number(args.tol)
         )));
     }
     if !args.exact {
@@ -275,7 +275,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         "target": target,
         "parameters": {
             "n": args.n, "dims": args.dims, "sets": args.sets, "seed": args.seed,
-            "method": if args.exact { "exact".to_string() } else { format!("nufft eps={}", crate::error::number(args.eps)) },
+            "method": if args.exact { "exact".to_string() } else { format!("nufft eps={}", number(args.eps)) },
             "strata": setup.strata, "repulsion": { "radius": setup.repulsion.radius, "weight": setup.repulsion.weight },
             "limits": setup.limits, "init": setup.init, "latin": setup.latin,
             "annular_weight": setup.annular_weight,
@@ -319,7 +319,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             Some(v) => eprintln!(
                 "{}: predicted variance {v:.4e} of random sampling's over the fit radius, |k| < {} (the frequencies the loss weighs), over {}",
                 f.proj,
-                crate::error::number((term.grid.fit_radius * 10.0).round() / 10.0),
+                number((term.grid.fit_radius * 10.0).round() / 10.0),
                 super::counted(f.sets, "set")
             ),
             None => eprintln!(
@@ -377,22 +377,66 @@ fn c_name(output: &Path) -> String {
     format!("anisospec_{}", crate::compare::report::slug(&stem))
 }
 
+/// The `anisospec optimize` command that makes this table again, every setting spelled out (defaults
+/// included, numbers in their shortest exact form), words with spaces or shell characters in single
+/// quotes.
+fn command_line(args: &OptimizeArgs) -> String {
+    fn word(s: &str) -> String {
+        let plain = !s.is_empty()
+            && s.chars()
+                .all(|c| c.is_ascii_alphanumeric() || "-_./=,:+@%".contains(c));
+        if plain {
+            s.to_string()
+        } else {
+            format!("'{}'", s.replace('\'', "'\\''"))
+        }
+    }
+    let mut parts = vec![
+        "anisospec optimize --target".to_string(),
+        word(&args.target.to_string_lossy()),
+        format!(
+            "--dims {} -n {} --sets {} --seed {}",
+            args.dims, args.n, args.sets, args.seed
+        ),
+    ];
+    if let Some(init) = &args.init {
+        parts.push(format!("--init {}", word(init)));
+    }
+    if args.latin {
+        parts.push("--latin".into());
+    }
+    parts.push(format!(
+        "--annular-weight {} --repulsion-radius {} --repulsion-weight {} --strat-radius {} --strat-weight {}",
+        number(args.annular_weight),
+        number(args.repulsion_radius),
+        number(args.repulsion_weight),
+        number(args.strat_radius),
+        number(args.strat_weight)
+    ));
+    parts.push(if args.exact {
+        "--exact".to_string()
+    } else {
+        format!("--eps {}", number(args.eps))
+    });
+    parts.push(format!(
+        "--max-iters {} --max-seconds {} --tol {} -o",
+        args.max_iters,
+        number(args.max_seconds),
+        number(args.tol)
+    ));
+    parts.push(word(&args.output.to_string_lossy()));
+    parts.join(" ")
+}
+
 /// A C header with the same numbers as the npy table: `static const double NAME[sets][n][dims]` and
 /// the macros `NAME_SETS`, `NAME_N`, `NAME_DIMS` (upper case), inside the include guard `NAME_H`, with
-/// `NAME` from [`c_name`] of `-o`.
+/// `NAME` from [`c_name`] of `-o`; its first line, a comment, is the [`command_line`] of the run.
 fn write_header(path: &Path, points: &PointSets, args: &OptimizeArgs) -> Result<()> {
     let name = c_name(&args.output);
     let upper = name.to_ascii_uppercase();
     write_atomic(path, |w| {
-        writeln!(
-            w,
-            "/* anisospec optimize --target {} --dims {} -n {} --sets {} --seed {} */",
-            args.target.display(),
-            args.dims,
-            args.n,
-            args.sets,
-            args.seed
-        )?;
+        // A comment ends at the first "*/": a path holding one is broken up.
+        writeln!(w, "/* {} */", command_line(args).replace("*/", "* /"))?;
         writeln!(w, "#ifndef {upper}_H\n#define {upper}_H")?;
         writeln!(w, "#define {upper}_SETS {}", points.sets())?;
         writeln!(w, "#define {upper}_N {}", points.n())?;

@@ -1874,6 +1874,28 @@ fn c_header_names_the_command_that_makes_the_table() {
     );
 }
 
+/// `variance` on a pixel of the scene (no Fourier coefficients) is refused before any work on the
+/// pixel: its reference is not rendered, and no cache folder appears.
+#[test]
+fn variance_refuses_a_pixel_before_rendering_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let o = Command::new(env!("CARGO_BIN_EXE_anisospec"))
+        .args([
+            "variance",
+            "--sampler",
+            "padded-mj",
+            "--integrand",
+            "pixel:px=20,py=20",
+            "-n",
+            "16",
+        ])
+        .env("ANISOSPEC_CACHE", &cache)
+        .output()
+        .expect("the binary runs");
+    refused(&o, &["variance"], "anisospec converge", &cache);
+}
+
 /// Two optimized tables' C headers can be included in one C file (and each twice): the include guard,
 /// the macros and the array are named after the file, `anisospec_` and its stem as a C identifier.
 #[test]
@@ -2131,10 +2153,25 @@ fn counts_must_be_positive_and_distinct() {
     let o = out.to_str().unwrap();
     let csv = out.with_extension("csv");
     let c = csv.to_str().unwrap();
-    let cases: [(Vec<&str>, &str, &Path); 8] = [
+    let cases: [(Vec<&str>, &str, &Path); 9] = [
         (
             vec!["sample", "--sampler", "mj", "-n", "-5", "-o", o],
             "a point count must be a positive integer (1 or more), not -5",
+            &out,
+        ),
+        (
+            vec![
+                "sample",
+                "--sampler",
+                "mj",
+                "-n",
+                "16",
+                "--seed",
+                "-1",
+                "-o",
+                o,
+            ],
+            "a seed is a whole number from 0 to 18446744073709551615, not -1",
             &out,
         ),
         (
@@ -2699,6 +2736,10 @@ fn lattice_designs_refuse_the_optimizers_flags() {
             "so --annular-weight would not apply",
         ),
         (vec!["--exact"], "so --exact would not apply"),
+        (
+            vec!["--strat-radius", "0.2", "--strat-weight", "0"],
+            "so --strat-radius and --strat-weight would not apply",
+        ),
     ] {
         let mut args = vec!["optimize", "--target", t, "--dims", "4", "-n", "16"];
         args.extend(flags);

@@ -31,8 +31,8 @@ pub struct CompareArgs {
     /// or out/cache, as for render).
     #[arg(long)]
     pub cache: Option<PathBuf>,
-    /// Override the seed of the study.
-    #[arg(long)]
+    /// Override the seed of the study (a whole number from 0 to 2^64 − 1).
+    #[arg(long, value_parser = crate::cli::parse_seed, allow_negative_numbers = true)]
     pub seed: Option<u64>,
 }
 

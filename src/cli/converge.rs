@@ -14,7 +14,9 @@ pub struct ConvergeArgs {
     /// lattice with that generating vector).
     #[arg(long, value_delimiter = ',', required = true)]
     pub sampler: Vec<String>,
-    /// Integrand, NAME:key=value,... (see `anisospec integrands`), e.g. disc:r=0.3.
+    /// Integrand, NAME:key=value,... (see `anisospec integrands`), e.g. disc:r=0.3. A pixel of the
+    /// scene (pixel:px=COLUMN,py=ROW) renders its reference once and keeps it in $ANISOSPEC_CACHE, or
+    /// out/cache under the working folder, for the next run.
     #[arg(long)]
     pub integrand: String,
     /// Sample counts N, comma-separated, e.g. 16,64,256,1024,4096.
@@ -32,7 +34,7 @@ pub struct ConvergeArgs {
     #[arg(long, default_value_t = 100, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub realizations: usize,
     /// Random seed: the same seed gives the same numbers whatever the thread count.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_seed, allow_negative_numbers = true)]
     pub seed: u64,
     /// Also move the integrand at random in every realization (its centre or edge offset); errors are
     /// then taken against each placement's own integral.

@@ -70,7 +70,7 @@ pub struct GalleryArgs {
     #[arg(long, default_value = "1e-6", allow_negative_numbers = true)]
     pub eps: f64,
     /// Random seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_seed, allow_negative_numbers = true)]
     pub seed: u64,
 }
 

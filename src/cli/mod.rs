@@ -61,6 +61,17 @@ pub fn parse_shear(text: &str) -> std::result::Result<(f64, f64), String> {
     }
 }
 
+/// Parses `--seed`: a whole number from 0 to `u64::MAX`. Negative numbers reach this parser (the
+/// flags using it allow them), so that `--seed -1` is answered with the range rather than as an
+/// unknown flag.
+pub fn parse_seed(text: &str) -> std::result::Result<u64, String> {
+    let rule = format!("a seed is a whole number from 0 to {}", u64::MAX);
+    match text.trim().parse::<i128>() {
+        Ok(v) => u64::try_from(v).map_err(|_| format!("{rule}, not {text}")),
+        Err(_) => Err(format!("'{text}' is not a whole number; {rule}, e.g. 1")),
+    }
+}
+
 /// Parses a whole number of at least `least` (0 or 1), or says what `rule` asks of it. Negative
 /// numbers reach this parser (the flags using it allow them) so that `-n -5` or `--res -2` is answered
 /// here rather than as an unknown flag.

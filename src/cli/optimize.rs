@@ -38,7 +38,7 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub sets: usize,
     /// Seed of the random starts (as in every other command).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_seed, allow_negative_numbers = true)]
     pub seed: u64,
     /// Output table, `.npy` ([sets, N, D] float64); the same numbers go to `.txt`, `.h`, a `.json`
     /// sidecar and a `.log.csv` next to it. The C header's array is named after the file:
@@ -163,6 +163,8 @@ fn refuse_solver_flags(args: &OptimizeArgs) -> Result<()> {
             args.repulsion_weight != DEFAULT_REPULSION.weight,
             "--repulsion-weight",
         ),
+        (args.strat_radius != DEFAULT_STRATA.radius, "--strat-radius"),
+        (args.strat_weight != DEFAULT_STRATA.weight, "--strat-weight"),
     ]
     .into_iter()
     .filter_map(|(is_given, flag)| is_given.then_some(flag))
@@ -185,7 +187,8 @@ fn refuse_solver_flags(args: &OptimizeArgs) -> Result<()> {
 pub fn run(args: &OptimizeArgs) -> Result<()> {
     check_args(args)?;
     let target = Target::load(&args.target)?;
-    if matches!(&target, Target::Variance(v) if v.design() == Design::Lattice) {
+    let lattice_search = matches!(&target, Target::Variance(v) if v.design() == Design::Lattice);
+    if lattice_search {
         refuse_solver_flags(args)?;
     }
     // The table at -o as given (`t.NPY` stays `t.NPY`), the other files beside it.
@@ -216,9 +219,14 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         target: target.clone(),
         n: args.n,
         dims: args.dims,
+        // A lattice search keeps no strata term: the loss it reports is the target's alone.
         strata: Strata {
             radius: args.strat_radius,
-            weight: args.strat_weight,
+            weight: if lattice_search {
+                0.0
+            } else {
+                args.strat_weight
+            },
         },
         repulsion: Repulsion {
             radius: args.repulsion_radius,

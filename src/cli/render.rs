@@ -29,7 +29,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 64, value_parser = crate::cli::parse_count, allow_negative_numbers = true)]
     pub spp: usize,
     /// Seed: pixel i uses stream i of it for its set and its toroidal shift.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_seed, allow_negative_numbers = true)]
     pub seed: u64,
     /// Shear each pixel's points by the depth oracle's shear in xu and yv (the scene needs an
     /// aperture; a camera whose shears could pass 1e6 in magnitude is refused).

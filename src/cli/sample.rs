@@ -27,7 +27,7 @@ pub struct SampleArgs {
     pub sets: usize,
     /// Random seed; set s uses stream s of this seed, so the same seed gives the same bits on any
     /// number of threads.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_seed, allow_negative_numbers = true)]
     pub seed: u64,
     #[command(flatten)]
     pub shear: ShearArgs,

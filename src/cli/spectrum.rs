@@ -57,7 +57,7 @@ pub struct SpectrumArgs {
     #[arg(long, default_value = "1e-6", allow_negative_numbers = true)]
     pub eps: f64,
     /// Random seed of the realizations (with --sampler).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_seed, allow_negative_numbers = true)]
     pub seed: u64,
     #[command(flatten)]
     pub shear: ShearArgs,

@@ -66,7 +66,7 @@ pub struct VarianceArgs {
     #[arg(long, default_value = "1e-9", allow_negative_numbers = true)]
     pub eps: f64,
     /// Random seed of the realizations.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_seed, allow_negative_numbers = true)]
     pub seed: u64,
     // The sampler sheared as --shear and --shear-mode say (4D integrands on xu and yv only): the
     // prediction is made in the unsheared pattern's frame, for the integrand pulled back through the

@@ -143,7 +143,7 @@ pub const MAX_PULLBACK_SAMPLES: usize = 4096;
 fn planes_of(f: &dyn Integrand) -> Result<Vec<Projection>> {
     f.spectral_planes().ok_or_else(|| {
         Error::Usage(format!(
-            "the spectrum of {} spreads over all {}D frequencies (a product over two projections); the Fourier prediction needs it on 2D projections (single integrands or sums of @proj terms); measure it with `anisospec converge` instead",
+            "the spectrum of {} is not known on 2D projections of its {}D frequencies (a pixel of the scene, or a product over two projections); the Fourier prediction needs it there (single integrands or sums of @proj terms); measure it with `anisospec converge` instead",
             f.name(),
             f.dims()
         ))
@@ -471,7 +471,8 @@ pub fn predict(
         )));
     }
     let pattern = frame.as_ref().map_or(sampler, |fr| fr.pattern);
-    let planes = f.spectral_planes().unwrap_or_default();
+    // Before any work on f (a pixel's reference renders): the prediction needs f̂ on 2D planes.
+    let planes = planes_of(f)?;
     let (mean_square, integral) = (mean_square_reference(f), f.reference());
     let var_f = mean_square.value - integral.value.powi(2);
     let var_f_stderr = mean_square

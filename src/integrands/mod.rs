@@ -43,9 +43,9 @@ pub fn mean_square_reference(f: &dyn Integrand) -> Reference {
     }
 }
 
-/// `∫f²` over `[0,1)^D` by randomized quasi-Monte Carlo: the mean of `f²` over
-/// [`MEAN_SQUARE_SCRAMBLES`] independent Owen scramblings (`sobol_burley`, fixed seeds) of a Sobol
-/// set of [`MEAN_SQUARE_POINTS`] points, with the standard error of that mean from their spread. The
+/// `∫f²` over `[0,1)^D` by randomized quasi-Monte Carlo: the mean of `f²` over 32 independent Owen
+/// scramblings (`sobol_burley`, fixed seeds) of a Sobol set of `2^16` points, with the standard error
+/// of that mean from their spread. The
 /// same bits on every run and thread count. For a sum of overlapping shapes, whose cross terms
 /// `∫f_i f_j` have no closed form here.
 pub fn estimate_mean_square(f: &dyn Integrand) -> Reference {

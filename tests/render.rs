@@ -14,6 +14,7 @@ use anisospec::render::image::{estimate_pixel, pixel_points};
 use anisospec::render::oracle::{oracle_image, oracle_pixel, PixelClass};
 use anisospec::render::{PixelIntegrand, Scene, SceneConfig};
 use anisospec::samplers::Sampler;
+use indicatif::ProgressBar;
 use rayon::prelude::*;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -310,7 +311,7 @@ fn bad_input_is_reported_with_exit_code_two() {
 
     let pinhole = write("pinhole.toml", "aperture = 0.0\n");
     let sc = Scene::load(Some(&pinhole)).unwrap();
-    let e = oracle_image(&sc).unwrap_err();
+    let e = oracle_image(&sc, &ProgressBar::hidden()).unwrap_err();
     assert_eq!(e.exit_code(), 2);
     assert!(e.to_string().contains("aperture"), "{e}");
     let args = anisospec::cli::oracle::OracleArgs {
@@ -553,13 +554,13 @@ fn image_mse(image: &[f64], reference: &[f64]) -> (f64, f64) {
 fn whole_image_mse_table() {
     use anisospec::render::image::{oracle_shears, reference_image, render_image, WedgeShear};
     let sc = scene();
-    let hidden = indicatif::ProgressBar::hidden();
+    let hidden = ProgressBar::hidden();
     let reference = reference_image(&sc, 1 << 14, Some(&cache_dir()), &hidden).unwrap();
     println!(
         "reference: 2^14 rays per pixel, mean squared stderr {:.2e}",
         reference.noise_floor()
     );
-    let oracle = oracle_image(&sc).unwrap();
+    let oracle = oracle_image(&sc, &ProgressBar::hidden()).unwrap();
     let shears = oracle_shears(&oracle, WedgeShear::default());
     let spps = [16, 64, 256];
     let mut table = Vec::new();
@@ -688,9 +689,9 @@ fn reference_cache_round_trip() {
 fn render_is_deterministic_across_thread_counts() {
     use anisospec::render::image::render_image;
     let sc = scene();
-    let hidden = indicatif::ProgressBar::hidden();
+    let hidden = ProgressBar::hidden();
     let s = sampler("padded-mj");
-    let oracle = oracle_image(&sc).unwrap();
+    let oracle = oracle_image(&sc, &ProgressBar::hidden()).unwrap();
     let shears = anisospec::render::image::oracle_shears(&oracle, Default::default());
     let run = || {
         render_image(
@@ -776,7 +777,7 @@ fn scene_with_unbounded_shear_is_refused() {
         let bound = c.shear_bound();
         assert!(bound.is_finite() && bound > 0.0, "{c:?}: {bound}");
         let sc = Scene::new(c.clone()).unwrap();
-        let seen = oracle_image(&sc)
+        let seen = oracle_image(&sc, &ProgressBar::hidden())
             .unwrap()
             .iter()
             .map(|o| o.s_min.abs().max(o.s_max.abs()))

@@ -27,8 +27,8 @@ pub fn run(args: &OracleArgs) -> Result<()> {
     let inputs: Vec<std::path::PathBuf> = args.scene.iter().cloned().collect();
     crate::output::check_outputs(&[exr, npy], &inputs)?;
     let scene = Scene::load(args.scene.as_deref())?;
-    let oracle = oracle_image(&scene)?;
     let (w, h) = (scene.width(), scene.height());
+    let oracle = oracle_image(&scene, &crate::progress::bar(h as u64, "oracle rows"))?;
     let data = oracle_array(&oracle);
     let channels: Vec<(&str, Vec<f32>)> = ORACLE_CHANNELS
         .iter()

@@ -102,7 +102,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     samplers::validate_n(sampler.as_ref(), args.spp)?;
     let shears = if args.shear {
         require_aperture(&scene, "--shear")?;
-        Some(oracle_shears(&oracle_image(&scene)?, args.wedge_shear))
+        Some(oracle_shears(
+            &oracle_image(&scene, &crate::progress::bar(h as u64, "oracle rows"))?,
+            args.wedge_shear,
+        ))
     } else {
         None
     };

@@ -215,7 +215,7 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
         return Ok(out);
     }
     let scene = Arc::new(Scene::load(None)?);
-    let oracle = oracle_image(&scene)?;
+    let oracle = oracle_image(&scene, &indicatif::ProgressBar::hidden())?;
     let (w, h) = (scene.width(), scene.height());
     for class in &config.pixel_classes {
         // The pixel of that class nearest the image centre.

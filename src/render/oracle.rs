@@ -8,6 +8,7 @@
 
 use super::scene::Scene;
 use crate::error::{Error, Result};
+use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 /// Probes per axis of the `(x, y, u, v)` grid the shear range is taken over (`PROBES^4` rays a pixel,
@@ -117,14 +118,21 @@ pub fn oracle_pixel(scene: &Scene, px: usize, py: usize) -> PixelOracle {
     }
 }
 
-/// The oracle for every pixel, row-major from the top row. Needs a positive aperture.
-pub fn oracle_image(scene: &Scene) -> Result<Vec<PixelOracle>> {
+/// The oracle for every pixel, row-major from the top row; `bar` advances by one per row (pass
+/// `ProgressBar::hidden()` for none). Needs a positive aperture.
+pub fn oracle_image(scene: &Scene, bar: &ProgressBar) -> Result<Vec<PixelOracle>> {
     require_aperture(scene, "the oracle")?;
     let w = scene.width();
-    Ok((0..w * scene.height())
+    let rows: Vec<Vec<PixelOracle>> = (0..scene.height())
         .into_par_iter()
-        .map(|i| oracle_pixel(scene, i % w, i / w))
-        .collect())
+        .map(|py| {
+            let row = (0..w).map(|px| oracle_pixel(scene, px, py)).collect();
+            bar.inc(1);
+            row
+        })
+        .collect();
+    bar.finish_and_clear();
+    Ok(rows.concat())
 }
 
 /// Channel names of the oracle's EXR and the last axis of its npy, in order.

@@ -1819,6 +1819,30 @@ fn optimize_refuses_no_sets_before_any_work() {
     }
 }
 
+/// `--tol 0` runs until the loss stops changing; there L-BFGS divided by a zero curvature and stepped to
+/// NaN coordinates, which panicked in the spectrum code. The run now ends with a table, no NaN, and
+/// the reason it stopped.
+#[test]
+fn optimize_with_tol_zero_stops_cleanly() {
+    let (dir, out) = tmp("t.npy");
+    let o = anisospec(&[
+        "optimize",
+        "--target",
+        "targets/blue-noise.toml",
+        "-n",
+        "64",
+        "--tol",
+        "0",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(dir.path().join("t.txt")).unwrap();
+    assert!(!text.to_lowercase().contains("nan"), "{text}");
+    let json = std::fs::read_to_string(dir.path().join("t.json")).unwrap();
+    assert!(json.contains("\"stop\": \"stopped:"), "{json}");
+}
+
 /// The C header's first line is the whole command: run again (to another file), it makes the same
 /// table, bit for bit, with the flags that change a table (--init, --latin, --max-iters, a loss
 /// weight, --eps) given away from their defaults.

@@ -117,6 +117,14 @@ impl Problem<'_> {
                 return Ok(e.clone());
             }
         }
+        // L-BFGS on a loss that has stopped changing (e.g. with --tol 0) can divide by a zero
+        // curvature and step to NaN: a failed round, not a set the spectrum code must take.
+        if x.iter().any(|c| !c.is_finite()) {
+            return Err(argmin::core::ArgminError::InvalidParameter {
+                text: "the solver stepped to a non-finite coordinate".into(),
+            }
+            .into());
+        }
         let e = self.objective.evaluate(x);
         self.evaluations.fetch_add(1, Ordering::Relaxed);
         if !e.loss.is_finite() || e.gradient.iter().any(|g| !g.is_finite()) {
@@ -328,6 +336,9 @@ pub fn minimize(
             }
             (None, true) if gain < limits.tol => {
                 break format!("converged (steepest descent gained {gain:.1e} < tol)")
+            }
+            (None, true) if gain <= 0.0 => {
+                break "stopped: a round of steepest descent made no progress".to_string()
             }
             (None, false) if gain <= 0.0 && round.solver_exit => {
                 break format!(

@@ -444,13 +444,20 @@ impl Fan {
         let mut total = b.clamp(0.0, 1.0);
         let (xl, xr) = (b.max(0.0), a.min(1.0));
         if xr > xl {
-            let q = f64::from(p + 1);
-            total += w / q * (((a - xl) / w).powi(p + 1) - ((a - xr) / w).powi(p + 1));
+            // ∫_xl^xr ((a − x)/w)^p dx = (A^{p+1} − B^{p+1}) / ((p + 1) w^p) with A = a − xl,
+            // B = a − xr, written as (A − B) Σ A^{p−i} B^i: on a wide ramp A and B nearly agree and
+            // their powers' difference would cancel.
+            let (big, small) = ((a - xl) / w, (a - xr) / w);
+            let powers: f64 = (0..=p).map(|i| big.powi(p - i) * small.powi(i)).sum();
+            total += (xr - xl) * powers / f64::from(p + 1);
         }
         total
     }
 
-    /// `∫ f^p` over the square: quadrature in `u` cut where the ramp's ends cross `x1 = 0` or `x1 = 1`.
+    /// `∫ f^p` over the square: quadrature in `u` cut where the ramp's ends cross `x1 = 0` or `x1 = 1`,
+    /// and at `u = 2^j / (s1 − s0)`, where the ramp's width `(s1 − s0) u` doubles past 1: beyond it
+    /// `∫f^p dx1` falls as `1/u` (a wide fan's ramp leaves only its slope on the square), which four
+    /// panels on one piece cannot follow (a fan of range 2000 lost 13 % of its variance).
     fn moment(&self, p: i32) -> f64 {
         let mut breaks = Vec::new();
         for s in [self.s0, self.s1] {
@@ -458,6 +465,11 @@ impl Fan {
                 breaks.push(self.c / s);
                 breaks.push((self.c - 1.0) / s);
             }
+        }
+        let mut u = 1.0 / (self.s1 - self.s0);
+        while u < 1.0 {
+            breaks.push(u);
+            u *= 2.0;
         }
         let rule = quad::gauss_legendre(FAN_RULE);
         quad::integrate(&rule, 0.0, 1.0, &breaks, 4, |u| self.inner(u, p))
@@ -758,6 +770,46 @@ mod tests {
         }
         let var = fan.mean_square().unwrap() - fan.reference().value.powi(2);
         assert!(s < var && s > 0.9 * var, "{s} vs {var}");
+    }
+
+    /// The fan's `∫f` and `∫f²` against the same inner integrals summed over `u` on pieces of ratio
+    /// 1.5 from 1e-9, 200 panels each, for ranges up to the largest shear (a range of 2000 lost 13 %
+    /// of its variance before the geometric cuts); and the variance of the fan `s0 = −s1 = −1000`
+    /// through the centre against an independent numeric integral, 1.2498e-4.
+    #[test]
+    fn wide_fans_have_exact_moments() {
+        let rule = quad::gauss_legendre(FAN_RULE);
+        for (s0, s1, c) in [
+            (-1e3, 1e3, None),
+            (-1e6, 1e6, None),
+            (1e3, 1e6, Some(500.0)),
+            (0.3, 0.7, None),
+            (-300.0, 700.0, None),
+        ] {
+            let fan = Fan::new(s0, s1, c).unwrap();
+            let mut breaks = Vec::new();
+            for s in [s0, s1] {
+                breaks.extend([fan.c / s, (fan.c - 1.0) / s]);
+            }
+            for p in [1, 2] {
+                // Pieces of geometric length down to the ramp's scale, many panels each.
+                let mut cuts = breaks.clone();
+                let mut u = 1e-9;
+                while u < 1.0 {
+                    cuts.push(u);
+                    u *= 1.5;
+                }
+                let brute = quad::integrate(&rule, 0.0, 1.0, &cuts, 200, |u| fan.inner(u, p));
+                let m = fan.moment(p);
+                assert!(
+                    (m - brute).abs() <= 1e-12 * brute.abs(),
+                    "s0={s0} s1={s1} p={p}: {m} vs {brute}"
+                );
+            }
+        }
+        let fan = Fan::new(-1e3, 1e3, None).unwrap();
+        let var = fan.square - fan.integral.powi(2);
+        assert!((var / 1.2498e-4 - 1.0).abs() < 1e-4, "{var}");
     }
 
     #[test]

@@ -43,6 +43,11 @@ pub fn cone_index(k1: i64, k2: i64, cones: usize) -> usize {
     ((theta / width + 0.5).floor() as usize) % cones
 }
 
+/// An annulus whose mean `E[P]` is below this is dark to the precision of the spectra (white noise
+/// has `P = 1`; the exact zeros of a lattice come out near 1e-31, and the finest NUFFT tolerance is
+/// 1e-12 relative): its anisotropy is not reported.
+pub const DARK_TO_ROUNDING: f64 = 1e-12;
+
 /// One annulus of a radial profile.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RadialBin {
@@ -55,8 +60,10 @@ pub struct RadialBin {
     /// Standard error of `mean` (per-bin standard errors combined as independent); `None` from a
     /// single realization, whose spread is unknown.
     pub stderr: Option<f64>,
-    /// `10 log10(var / mean²)` of `E[P]` within the annulus, in dB.
-    pub anisotropy_db: f64,
+    /// `10 log10(var / mean²)` of `E[P]` within the annulus, in dB; `None` where the annulus is dark
+    /// to rounding (mean below [`DARK_TO_ROUNDING`]) or flat to rounding, where the ratio is one of
+    /// rounding errors.
+    pub anisotropy_db: Option<f64>,
     /// Mean of `E[P]` in each directional cone of the annulus (`None` where a cone has no bin).
     pub cones: Vec<Option<f64>>,
 }
@@ -67,7 +74,6 @@ pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize) -> Vec<RadialBin> {
     let res = spec.res;
     let rmax = res / 2;
     let mut sum = vec![0.0; rmax];
-    let mut sum_sq = vec![0.0; rmax];
     let mut var_sum = vec![0.0; rmax];
     let mut count = vec![0usize; rmax];
     let mut cone_sum = vec![vec![0.0; cones]; rmax];
@@ -82,7 +88,6 @@ pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize) -> Vec<RadialBin> {
             let p = spec.mean[i * res + j];
             let se = spec.stderr[i * res + j];
             sum[r] += p;
-            sum_sq[r] += p * p;
             var_sum[r] += se * se;
             count[r] += 1;
             if cones > 0 {
@@ -92,17 +97,28 @@ pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize) -> Vec<RadialBin> {
             }
         }
     }
+    let mean_of = |r: usize| sum[r] / count[r] as f64;
+    // The spread about each annulus's mean, in a second pass: Σp²/c − mean² cancels on a flat annulus.
+    let mut spread = vec![0.0; rmax];
+    for i in 0..res {
+        for j in 0..res {
+            let (k1, k2) = frequency(i * res + j, res);
+            let r = annulus(k1, k2);
+            if r > 0 && r < rmax {
+                spread[r] += (spec.mean[i * res + j] - mean_of(r)).powi(2);
+            }
+        }
+    }
     (1..rmax)
         .map(|r| {
             let c = count[r] as f64;
-            let mean = sum[r] / c;
-            let var = (sum_sq[r] / c - mean * mean).max(0.0);
-            let anisotropy_db = if mean > 0.0 && var > 0.0 {
-                10.0 * (var / (mean * mean)).log10()
-            } else {
-                // A perfectly flat annulus: report the floor of f64 rather than -inf.
-                10.0 * f64::EPSILON.log10()
-            };
+            let mean = mean_of(r);
+            let var = spread[r] / c;
+            // Undefined on an annulus dark to rounding (exact zeros of a lattice come out near 1e-31)
+            // or flat to rounding (identical points: P = N everywhere): a ratio of rounding errors.
+            let rounding = 8.0 * f64::EPSILON * mean;
+            let anisotropy_db = (mean > DARK_TO_ROUNDING && var.sqrt() > rounding)
+                .then(|| 10.0 * (var / (mean * mean)).log10());
             RadialBin {
                 r,
                 r_normalized: r as f64 / (spec.n as f64).sqrt(),
@@ -120,8 +136,8 @@ pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize) -> Vec<RadialBin> {
 }
 
 /// Writes a radial profile as CSV: `r, r_normalized, mean, stderr, anisotropy_db` and one `cone_c` column
-/// per cone, headed with the cone's centre angle in degrees (an empty cell where a cone has no bin, and
-/// in `stderr` from a single realization).
+/// per cone, headed with the cone's centre angle in degrees (an empty cell where a cone has no bin, in
+/// `stderr` from a single realization, and in `anisotropy_db` where it is undefined).
 pub fn write_radial_csv(path: &Path, profile: &[RadialBin]) -> Result<()> {
     let cones = profile.first().map_or(0, |b| b.cones.len());
     write_atomic(path, |w| {
@@ -132,10 +148,11 @@ pub fn write_radial_csv(path: &Path, profile: &[RadialBin]) -> Result<()> {
         writeln!(w)?;
         for b in profile {
             let stderr = b.stderr.map_or(String::new(), |se| se.to_string());
+            let anisotropy = b.anisotropy_db.map_or(String::new(), |a| a.to_string());
             write!(
                 w,
-                "{},{},{},{stderr},{}",
-                b.r, b.r_normalized, b.mean, b.anisotropy_db
+                "{},{},{},{stderr},{anisotropy}",
+                b.r, b.r_normalized, b.mean
             )?;
             for c in &b.cones {
                 match c {
@@ -164,6 +181,52 @@ mod tests {
         assert_eq!(cone_index(3, -3, 4), 3);
     }
 
+    /// A 16 × 16 lattice's exact spectrum is 0 (to rounding) off its dual lattice, which starts at
+    /// |k| = 16: the annuli inside are dark and get no anisotropy; the one through the dual point
+    /// (16, 0) mixes P = 256 with zeros and gets a finite one. Identical points (P = N everywhere) get
+    /// none. A random set's annuli all get one.
+    #[test]
+    fn anisotropy_is_reported_only_where_it_means_something() {
+        let res = 64;
+        let of = |pts: Vec<[f64; 2]>| {
+            let n = pts.len();
+            radial_profile(
+                &ExpectedSpectrum {
+                    res,
+                    n,
+                    realizations: 1,
+                    mean: crate::spectrum::power(&pts, res, crate::spectrum::Method::Exact),
+                    stderr: vec![0.0; res * res],
+                },
+                0,
+            )
+        };
+        let lattice: Vec<[f64; 2]> = (0..256)
+            .map(|i| [(i % 16) as f64 / 16.0, (i / 16) as f64 / 16.0])
+            .collect();
+        let prof = of(lattice);
+        assert!(
+            prof[..15].iter().all(|b| b.anisotropy_db.is_none()),
+            "{prof:?}"
+        );
+        assert!(
+            prof[15].anisotropy_db.is_some_and(f64::is_finite),
+            "{:?}",
+            prof[15]
+        );
+        assert!(of(vec![[0.3, 0.6]; 64])
+            .iter()
+            .all(|b| b.anisotropy_db.is_none()));
+        use rand::Rng as _;
+        let mut rng = crate::rng::stream(1, 0);
+        let random: Vec<[f64; 2]> = (0..256)
+            .map(|_| [rng.random::<f64>(), rng.random::<f64>()])
+            .collect();
+        assert!(of(random)
+            .iter()
+            .all(|b| b.anisotropy_db.is_some_and(f64::is_finite)));
+    }
+
     #[test]
     fn white_spectrum_profile_is_flat() {
         let res = 16;
@@ -182,6 +245,10 @@ mod tests {
             // Independent bins of standard error 0.5: the annulus mean's is 0.5 / sqrt(count) > 0.
             assert!(b.stderr.is_some_and(|se| se > 0.0 && se < 0.5), "{b:?}");
         }
+        // A flat annulus has no anisotropy to report (its variance is 0), rather than a floor in dB.
+        assert!(radial_profile(&spec, 0)
+            .iter()
+            .all(|b| b.anisotropy_db.is_none()));
         // One realization has no spread to estimate: no standard error, not a zero one.
         let one = ExpectedSpectrum {
             realizations: 1,

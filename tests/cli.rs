@@ -2850,19 +2850,25 @@ fn variance_with_a_shear_says_where_its_grid_stops() {
 }
 
 /// At N = 2 the 4D strata term's blue-noise disc reaches no frequency cell. The user gave no
-/// blue-noise target, so the refusal names the strata term and its flags; without the term the
-/// lattice design runs.
+/// blue-noise target, so the refusal of a double-wedge table names the strata term and its flags;
+/// without the term it runs. A lattice design has no strata term at all.
 #[test]
 fn a_strata_term_out_of_reach_is_named_as_such() {
-    let (dir, out) = tmp("fan.npy");
-    let target = dir.path().join("fan.toml");
-    std::fs::write(
-        &target,
-        "kind = \"variance\"\nintegrand = \"fan:s0=0.3,s1=0.7\"\nshear = 0.5\nplacements = 0\nextent = 2.0\ndesign = \"lattice\"\n",
-    )
-    .unwrap();
-    let (t, o) = (target.to_str().unwrap(), out.to_str().unwrap());
-    let args = ["optimize", "--target", t, "--dims", "4", "-n", "2", "-o", o];
+    let (dir, out) = tmp("wedge.npy");
+    let o = out.to_str().unwrap();
+    let args = [
+        "optimize",
+        "--target",
+        "targets/double-wedge.toml",
+        "--dims",
+        "4",
+        "-n",
+        "2",
+        "--max-iters",
+        "2",
+        "-o",
+        o,
+    ];
     rejects(&args, "the 4D strata term", &out);
     rejects(&args, "--strat-weight 0", &out);
     let mut without = args.to_vec();
@@ -2874,6 +2880,37 @@ fn a_strata_term_out_of_reach_is_named_as_such() {
         String::from_utf8_lossy(&run.stderr)
     );
     assert!(out.is_file());
+    // A lattice design keeps no strata term: at N = 2 it runs as it is, and --strat-weight is one
+    // of the loss flags it refuses.
+    let target = dir.path().join("fan.toml");
+    std::fs::write(
+        &target,
+        "kind = \"variance\"\nintegrand = \"fan:s0=0.3,s1=0.7\"\nshear = 0.5\nplacements = 0\nextent = 2.0\ndesign = \"lattice\"\n",
+    )
+    .unwrap();
+    let lattice_out = dir.path().join("fan.npy");
+    let t = target.to_str().unwrap();
+    let args = [
+        "optimize",
+        "--target",
+        t,
+        "--dims",
+        "4",
+        "-n",
+        "2",
+        "-o",
+        lattice_out.to_str().unwrap(),
+    ];
+    let run = anisospec(&args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    std::fs::remove_file(&lattice_out).unwrap();
+    let mut with_weight = args.to_vec();
+    with_weight.extend(["--strat-weight", "0"]);
+    rejects(&with_weight, "--strat-weight would not apply", &lattice_out);
 }
 
 /// A radial profile holds the annuli r = 1 … K/2 − 1; at K = 2 there is none, so `spectrum --radial`

@@ -6,7 +6,7 @@ use crate::error::Result;
 use crate::integrands::parse;
 use crate::samplers;
 use crate::spectrum::Method;
-use crate::variance::{predict, write_csv, VarianceConfig, VariancePrediction};
+use crate::variance::{predict_with_progress, write_csv, VarianceConfig, VariancePrediction};
 use std::path::PathBuf;
 
 /// Above this share of the predicted variance (a fraction), the white-noise tail is reported as
@@ -102,7 +102,12 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
         seed: args.seed,
         method,
     };
-    let pred = predict(sampler.as_ref(), f.as_ref(), &args.n, &cfg)?;
+    let bar = crate::progress::bar(
+        (args.n.len() * args.realizations) as u64,
+        "variance realizations",
+    );
+    let pred = predict_with_progress(sampler.as_ref(), f.as_ref(), &args.n, &cfg, &bar)?;
+    bar.finish_and_clear();
     let grid = match args.res_per_n {
         Some(m) => format!("max({}, {m}·N)", args.res),
         None => args.res.to_string(),

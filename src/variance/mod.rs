@@ -27,6 +27,7 @@ use crate::samplers::{Sampler, ShearFrame};
 use crate::spectrum::profiles::cone_index;
 use crate::spectrum::{check_res, fourier_sums, frequency, Method};
 use crate::stats::Welford;
+use indicatif::ProgressBar;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
@@ -365,8 +366,10 @@ fn realizations(
     n: usize,
     res: usize,
     cfg: &VarianceConfig,
+    bar: &ProgressBar,
 ) -> RealizationSums {
     let one = |r: usize| {
+        bar.inc(1);
         let set = sampler.generate(n, &mut rng::substream(cfg.seed, r as u64, n as u64));
         let mut cones = vec![0.0; cfg.cones];
         for (p, active) in spec.planes.iter().zip(&spec.active) {
@@ -457,6 +460,18 @@ pub fn predict(
     ns: &[usize],
     cfg: &VarianceConfig,
 ) -> Result<VariancePrediction> {
+    predict_with_progress(sampler, f, ns, cfg, &ProgressBar::hidden())
+}
+
+/// [`predict`], advancing `bar` by one per realization at every `N` (`ns.len() × realizations` in
+/// all).
+pub fn predict_with_progress(
+    sampler: &dyn Sampler,
+    f: &dyn Integrand,
+    ns: &[usize],
+    cfg: &VarianceConfig,
+    bar: &ProgressBar,
+) -> Result<VariancePrediction> {
     check_plan(sampler, f, ns, cfg.realizations)?;
     check_config(cfg)?;
     // A sheared sampler is predicted in its pattern's frame (see the module doc).
@@ -494,7 +509,7 @@ pub fn predict(
             spec = Some((res, computed));
         }
         let spec = &spec.as_ref().expect("computed above").1;
-        let per = realizations(pattern, spec, n, res, cfg);
+        let per = realizations(pattern, spec, n, res, cfg, bar);
         let (grid, stderr) = (per.total.mean(), per.total.stderr());
         let cones = per.cones.iter().map(Welford::mean).collect();
         let cone_stderr = per.cones.iter().map(Welford::stderr).collect();

@@ -141,6 +141,9 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
             let proj = Projection::parse(&args.proj, sampler.dims())?;
             let n = args.n.expect("clap requires -n with --sampler");
             let r = args.realizations.unwrap_or(32);
+            if let Some(note) = long_exact_note(n, args.res, r, method) {
+                eprintln!("{note}");
+            }
             of_sampler(sampler.as_ref(), n, proj, args.res, r, args.seed, method)?
         }
         (None, Some(path)) => {
@@ -177,6 +180,9 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
                 }
                 None => sets,
             };
+            if let Some(note) = long_exact_note(sets.n(), args.res, sets.sets(), method) {
+                eprintln!("{note}");
+            }
             of_sets(&sets, proj, args.res, method)?
         }
         (None, None) => unreachable!("clap requires --sampler or --input"),
@@ -208,6 +214,34 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
 }
 
 /// The refusal of `--stderr` over a single realization, whose standard error is 0 in every bin.
+/// Exact DFT terms (`N × K² × R`, one complex multiply-add each) above which `spectrum --exact` says
+/// what it has taken on: at the 3e8 to 1e9 terms a second per core measured on two AMD EPYC machines
+/// (benches/spectrum.rs), a minute or more on two cores.
+const LONG_EXACT_TERMS: f64 = 1e11;
+
+/// What a long exact run has taken on, to say on stderr before it starts: `None` for the NUFFT or
+/// for an exact run of at most [`LONG_EXACT_TERMS`] terms.
+fn long_exact_note(n: usize, res: usize, realizations: usize, method: Method) -> Option<String> {
+    let terms = n as f64 * (res as f64).powi(2) * realizations as f64;
+    (method == Method::Exact && terms > LONG_EXACT_TERMS).then(|| {
+        format!(
+            "note: the exact DFT sums N x K^2 x R = {n} x {res}^2 x {realizations} = {terms:.1e} terms, at about 3e8 to 1e9 a second per core: {} to {} on one core; the NUFFT (drop --exact; --eps 1e-9 keeps P within 1e-8 relative) takes a small fraction of that",
+            duration(terms / 1e9),
+            duration(terms / 3e8)
+        )
+    })
+}
+
+/// Seconds as a short duration: `45 s`, `12 min`, `3.5 h`, `2.1 days`.
+fn duration(seconds: f64) -> String {
+    match seconds {
+        s if s < 120.0 => format!("{s:.0} s"),
+        s if s < 7200.0 => format!("{:.0} min", s / 60.0),
+        s if s < 172_800.0 => format!("{:.1} h", s / 3600.0),
+        s => format!("{:.1} days", s / 86400.0),
+    }
+}
+
 fn no_stderr(why: &str, fix: &str) -> Error {
     Error::Usage(format!(
         "--stderr needs 2 or more realizations ({why}, and one realization's spread is 0 in every bin); {fix}, or leave out --stderr"
@@ -228,4 +262,26 @@ pub fn write_spectrum(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_long_exact_run_is_announced_with_its_cost() {
+        // 4096 × 1024² × 100 = 4.3e11 terms: 7 to 24 minutes on one core.
+        let note = long_exact_note(4096, 1024, 100, Method::Exact).unwrap();
+        assert!(note.contains("4.3e11 terms"), "{note}");
+        assert!(note.contains("7 min to 24 min"), "{note}");
+        // The same job through the NUFFT, and an exact job of 1e11 terms or fewer, say nothing.
+        assert_eq!(
+            long_exact_note(4096, 1024, 100, Method::Nufft { eps: 1e-6 }),
+            None
+        );
+        assert_eq!(long_exact_note(4096, 256, 100, Method::Exact), None);
+        assert_eq!(duration(45.0), "45 s");
+        assert_eq!(duration(3.5 * 3600.0), "3.5 h");
+        assert_eq!(duration(3.0 * 86400.0), "3.0 days");
+    }
 }

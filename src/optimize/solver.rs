@@ -103,11 +103,16 @@ impl Variables<'_> {
     }
 }
 
+/// The lowest-loss point a round has evaluated, kept outside the solver: a round that fails (a
+/// non-finite step) still hands back what it gained.
+type BestSeen = Arc<Mutex<Option<(Vec<f64>, f64)>>>;
+
 /// The argmin view of an objective: cost and gradient share one evaluation through a cache.
 struct Problem<'a> {
     objective: &'a Variables<'a>,
     cache: Mutex<Option<(Vec<f64>, Evaluation)>>,
     evaluations: Arc<AtomicU64>,
+    best_seen: BestSeen,
 }
 
 impl Problem<'_> {
@@ -133,6 +138,11 @@ impl Problem<'_> {
             }
             .into());
         }
+        let mut best = self.best_seen.lock().expect("best lock");
+        if best.as_ref().is_none_or(|b| e.loss < b.1) {
+            *best = Some((x.to_vec(), e.loss));
+        }
+        drop(best);
         *self.cache.lock().expect("cache lock") = Some((x.to_vec(), e.clone()));
         Ok(e)
     }
@@ -193,6 +203,9 @@ fn run_round(
     fallback: bool,
     tol: f64,
 ) -> Round {
+    let best_seen = Arc::clone(&problem.best_seen);
+    let rows = Arc::clone(&recorder.rows);
+    let rows_before = rows.lock().expect("log lock").len();
     macro_rules! finish {
         ($res:expr) => {
             match $res {
@@ -213,9 +226,10 @@ fn run_round(
                         ),
                     }
                 }
+                // The best point evaluated and the iterations logged before the failure.
                 Err(e) => Round {
-                    best: None,
-                    iters: 0,
+                    best: best_seen.lock().expect("best lock").take(),
+                    iters: (rows.lock().expect("log lock").len() - rows_before) as u64,
                     failed: Some(e.to_string()),
                     reason: String::new(),
                     solver_exit: false,
@@ -290,6 +304,7 @@ pub fn minimize(
             objective,
             cache: Mutex::new(Some((best.0.clone(), best.1.clone()))),
             evaluations: Arc::clone(&counter),
+            best_seen: Arc::new(Mutex::new(None)),
         };
         let solver_name = if use_fallback {
             "steepest-descent"

@@ -204,13 +204,9 @@ pub fn write_folder<T>(
     marker: ReportMarker,
     write: impl FnOnce(&Path) -> Result<T>,
 ) -> Result<T> {
-    // The folders this call makes (dest and its missing ancestors), innermost first.
-    let created: Vec<PathBuf> = dest
-        .ancestors()
-        .take_while(|a| !a.as_os_str().is_empty() && a.symlink_metadata().is_err())
-        .map(Path::to_path_buf)
-        .collect();
-    let result = staging_folder(dest).and_then(|staging| {
+    let mut created = Vec::new();
+    let result = create_folders(dest, &mut created)
+        .and_then(|()| staging_folder(dest)).and_then(|staging| {
         let value =
             write(staging.path()).map_err(|e| e.with_path_replaced(staging.path(), dest))?;
         let earlier = read_manifest(dest)?;
@@ -227,12 +223,30 @@ pub fn write_folder<T>(
         Ok(value)
     });
     if result.is_err() {
-        // Only empty folders go; a failure to remove one changes nothing.
-        for folder in &created {
+        // Only empty folders go, innermost first; a failure to remove one changes nothing.
+        for folder in created.iter().rev() {
             let _ = std::fs::remove_dir(folder);
         }
     }
     result
+}
+
+/// Makes `dest` and its missing ancestors, outermost first, and lists in `created` the folders this
+/// call made: one that exists already, or that another process makes first, is not listed.
+fn create_folders(dest: &Path, created: &mut Vec<PathBuf>) -> Result<()> {
+    let mut chain: Vec<&Path> = dest
+        .ancestors()
+        .take_while(|a| !a.as_os_str().is_empty())
+        .collect();
+    chain.reverse();
+    for folder in chain {
+        match std::fs::create_dir(folder) {
+            Ok(()) => created.push(folder.to_path_buf()),
+            Err(_) if folder.is_dir() => {}
+            Err(e) => return Err(Error::io("create the folder", folder, e)),
+        }
+    }
+    Ok(())
 }
 
 /// A temporary folder inside `dir` (created if missing), on the file system of the outputs.

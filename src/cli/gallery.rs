@@ -130,7 +130,7 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
             super::spectrum::write_spectrum(&spec, &outputs, &[ImageKind::Png, ImageKind::Npy])?;
             write_radial_csv(
                 &dir.join(format!("{stem}_radial.csv")),
-                &radial_profile(&spec, 8),
+                &radial_profile(&spec, 8, method),
             )?;
             eprintln!("{stem}: N = {n}, {:.2} s", started.elapsed().as_secs_f64());
             rows.push((sampler.name(), dims, proj.name(), n, stem));

@@ -71,7 +71,8 @@ pub struct SpectrumArgs {
     #[arg(long)]
     pub stderr: Option<PathBuf>,
     /// Write the radial profile as CSV: r, r/sqrt(N), mean, stderr (empty from one realization),
-    /// anisotropy (dB) and, with --cones, one column per directional cone; one row per annulus
+    /// anisotropy (dB; empty where the annulus is dark or flat within the method's error) and, with
+    /// --cones, one column per directional cone; one row per annulus
     /// r = 1 … K/2 − 1 (needs --res 4 or more).
     #[arg(long)]
     pub radial: Option<PathBuf>,
@@ -194,7 +195,7 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
             write_npy(&staged(path), &[spec.res, spec.res], &spec.stderr)?;
         }
         if let Some(path) = &args.radial {
-            write_radial_csv(&staged(path), &radial_profile(&spec, args.cones))?;
+            write_radial_csv(&staged(path), &radial_profile(&spec, args.cones, method))?;
         }
         Ok(())
     })?;

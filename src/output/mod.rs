@@ -206,22 +206,23 @@ pub fn write_folder<T>(
 ) -> Result<T> {
     let mut created = Vec::new();
     let result = create_folders(dest, &mut created)
-        .and_then(|()| staging_folder(dest)).and_then(|staging| {
-        let value =
-            write(staging.path()).map_err(|e| e.with_path_replaced(staging.path(), dest))?;
-        let earlier = read_manifest(dest)?;
-        let before_manifest = earlier.is_none() && marker.is_in(dest);
-        let earlier = earlier.unwrap_or_default();
-        let incoming = check_tree(staging.path(), dest, |target| {
-            in_real_folders(dest, target)
-                && (before_manifest || earlier.iter().any(|e| e == target))
-        })?;
-        write_manifest(dest, earlier.iter().chain(&incoming))?;
-        let written = move_tree(staging.path(), dest)?;
-        prune_stale(dest, &earlier, &written)?;
-        write_manifest(dest, written.iter())?;
-        Ok(value)
-    });
+        .and_then(|()| staging_folder(dest))
+        .and_then(|staging| {
+            let value =
+                write(staging.path()).map_err(|e| e.with_path_replaced(staging.path(), dest))?;
+            let earlier = read_manifest(dest)?;
+            let before_manifest = earlier.is_none() && marker.is_in(dest);
+            let earlier = earlier.unwrap_or_default();
+            let incoming = check_tree(staging.path(), dest, |target| {
+                in_real_folders(dest, target)
+                    && (before_manifest || earlier.iter().any(|e| e == target))
+            })?;
+            write_manifest(dest, earlier.iter().chain(&incoming))?;
+            let written = move_tree(staging.path(), dest)?;
+            prune_stale(dest, &earlier, &written)?;
+            write_manifest(dest, written.iter())?;
+            Ok(value)
+        });
     if result.is_err() {
         // Only empty folders go, innermost first; a failure to remove one changes nothing.
         for folder in created.iter().rev() {

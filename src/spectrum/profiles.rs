@@ -4,7 +4,7 @@
 //! `k2 = i − K/2` (see [`super::frequency`]).
 
 use super::expected::ExpectedSpectrum;
-use super::frequency;
+use super::{frequency, Method};
 use crate::error::{Error, Result};
 use crate::output::write_atomic;
 use std::f64::consts::PI;
@@ -43,11 +43,6 @@ pub fn cone_index(k1: i64, k2: i64, cones: usize) -> usize {
     ((theta / width + 0.5).floor() as usize) % cones
 }
 
-/// An annulus whose mean `E[P]` is below this is dark to the precision of the spectra (white noise
-/// has `P = 1`; the exact zeros of a lattice come out near 1e-31, and the finest NUFFT tolerance is
-/// 1e-12 relative): its anisotropy is not reported.
-pub const DARK_TO_ROUNDING: f64 = 1e-12;
-
 /// One annulus of a radial profile.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RadialBin {
@@ -61,16 +56,37 @@ pub struct RadialBin {
     /// single realization, whose spread is unknown.
     pub stderr: Option<f64>,
     /// `10 log10(var / mean²)` of `E[P]` within the annulus, in dB; `None` where the annulus is dark
-    /// to rounding (mean below [`DARK_TO_ROUNDING`]) or flat to rounding, where the ratio is one of
-    /// rounding errors.
+    /// or flat within the error of the method that computed `P` ([`precision`]), where the ratio would
+    /// be one of errors.
     pub anisotropy_db: Option<f64>,
     /// Mean of `E[P]` in each directional cone of the annulus (`None` where a cone has no bin).
     pub cones: Vec<Option<f64>>,
 }
 
+/// How far `method`'s `P` may be off, for `n` points on a `res × res` grid: `(dark, flat)`, the
+/// absolute error of a bin whose true `P` is 0, and the relative error of any bin.
+/// - Exact DFT: each of the `N` terms of `F` errs by at most `ρ_F` (the bound derived in
+///   [`crate::variance`]'s `relative_error`: `ρ_F = (√2 N + 2π K + 1569) u`, `u = 2^−53`), so
+///   `|ΔF| ≤ ρ_F N`, a dark bin holds at most `ρ_F² N` and `P` errs by `2 ρ_F + 2 u` relative.
+/// - NUFFT: the contract, `10·eps` relative on `P`; a dark bin holds at most `(10 eps)² N`, the error
+///   of `F` being at most `10 eps N` when every point's error adds up (a lattice).
+pub fn precision(method: Method, n: usize, res: usize) -> (f64, f64) {
+    let n = n as f64;
+    match method {
+        Method::Exact => {
+            let u = f64::EPSILON / 2.0;
+            let rho = (std::f64::consts::SQRT_2 * n + 2.0 * PI * res as f64 + 1569.0) * u;
+            (rho * rho * n, 2.0 * rho + 2.0 * u)
+        }
+        Method::Nufft { eps } => ((10.0 * eps).powi(2) * n, 10.0 * eps),
+    }
+}
+
 /// Radial mean, anisotropy and (with `cones > 0`) per-cone profiles for `r = 1 … K/2 − 1`: the annuli
-/// that lie entirely inside the grid.
-pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize) -> Vec<RadialBin> {
+/// that lie entirely inside the grid. `method` is the one that computed `spec`: it says where the
+/// anisotropy is within its error ([`precision`]).
+pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize, method: Method) -> Vec<RadialBin> {
+    let (dark, flat) = precision(method, spec.n, spec.res);
     let res = spec.res;
     let rmax = res / 2;
     let mut sum = vec![0.0; rmax];
@@ -114,10 +130,9 @@ pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize) -> Vec<RadialBin> {
             let c = count[r] as f64;
             let mean = mean_of(r);
             let var = spread[r] / c;
-            // Undefined on an annulus dark to rounding (exact zeros of a lattice come out near 1e-31)
-            // or flat to rounding (identical points: P = N everywhere): a ratio of rounding errors.
-            let rounding = 8.0 * f64::EPSILON * mean;
-            let anisotropy_db = (mean > DARK_TO_ROUNDING && var.sqrt() > rounding)
+            // Undefined on an annulus dark within the method's error (a lattice's exact zeros) or
+            // flat within it (identical points: P = N everywhere): a ratio of errors.
+            let anisotropy_db = (mean > dark && var.sqrt() > flat * mean)
                 .then(|| 10.0 * (var / (mean * mean)).log10());
             RadialBin {
                 r,
@@ -181,50 +196,53 @@ mod tests {
         assert_eq!(cone_index(3, -3, 4), 3);
     }
 
-    /// A 16 × 16 lattice's exact spectrum is 0 (to rounding) off its dual lattice, which starts at
-    /// |k| = 16: the annuli inside are dark and get no anisotropy; the one through the dual point
-    /// (16, 0) mixes P = 256 with zeros and gets a finite one. Identical points (P = N everywhere) get
-    /// none. A random set's annuli all get one.
+    /// A 16 × 16 lattice's spectrum is 0 (within the method's error) off its dual lattice, which
+    /// starts at |k| = 16: the annuli inside are dark and get no anisotropy; the one through the dual
+    /// point (16, 0) mixes P = 256 with zeros and gets a finite one. Identical points (P = N
+    /// everywhere) get none. A random set's annuli all get one. With the exact DFT and with the NUFFT
+    /// at eps = 1e-6 (whose dark bins are far above the exact DFT's rounding).
     #[test]
     fn anisotropy_is_reported_only_where_it_means_something() {
-        let res = 64;
-        let of = |pts: Vec<[f64; 2]>| {
-            let n = pts.len();
-            radial_profile(
-                &ExpectedSpectrum {
-                    res,
-                    n,
-                    realizations: 1,
-                    mean: crate::spectrum::power(&pts, res, crate::spectrum::Method::Exact),
-                    stderr: vec![0.0; res * res],
-                },
-                0,
-            )
-        };
-        let lattice: Vec<[f64; 2]> = (0..256)
-            .map(|i| [(i % 16) as f64 / 16.0, (i / 16) as f64 / 16.0])
-            .collect();
-        let prof = of(lattice);
-        assert!(
-            prof[..15].iter().all(|b| b.anisotropy_db.is_none()),
-            "{prof:?}"
-        );
-        assert!(
-            prof[15].anisotropy_db.is_some_and(f64::is_finite),
-            "{:?}",
-            prof[15]
-        );
-        assert!(of(vec![[0.3, 0.6]; 64])
-            .iter()
-            .all(|b| b.anisotropy_db.is_none()));
         use rand::Rng as _;
+        let res = 64;
         let mut rng = crate::rng::stream(1, 0);
         let random: Vec<[f64; 2]> = (0..256)
             .map(|_| [rng.random::<f64>(), rng.random::<f64>()])
             .collect();
-        assert!(of(random)
-            .iter()
-            .all(|b| b.anisotropy_db.is_some_and(f64::is_finite)));
+        let lattice: Vec<[f64; 2]> = (0..256)
+            .map(|i| [(i % 16) as f64 / 16.0, (i / 16) as f64 / 16.0])
+            .collect();
+        for method in [Method::Exact, Method::Nufft { eps: 1e-6 }] {
+            let of = |pts: &[[f64; 2]]| {
+                radial_profile(
+                    &ExpectedSpectrum {
+                        res,
+                        n: pts.len(),
+                        realizations: 1,
+                        mean: crate::spectrum::power(pts, res, method),
+                        stderr: vec![0.0; res * res],
+                    },
+                    0,
+                    method,
+                )
+            };
+            let prof = of(&lattice);
+            assert!(
+                prof[..15].iter().all(|b| b.anisotropy_db.is_none()),
+                "{method:?}: {prof:?}"
+            );
+            assert!(
+                prof[15].anisotropy_db.is_some_and(f64::is_finite),
+                "{method:?}: {:?}",
+                prof[15]
+            );
+            assert!(of(&[[0.3, 0.6]; 64])
+                .iter()
+                .all(|b| b.anisotropy_db.is_none()));
+            assert!(of(&random)
+                .iter()
+                .all(|b| b.anisotropy_db.is_some_and(f64::is_finite)));
+        }
     }
 
     #[test]
@@ -237,7 +255,7 @@ mod tests {
             mean: vec![1.0; res * res],
             stderr: vec![0.5; res * res],
         };
-        let prof = radial_profile(&spec, 4);
+        let prof = radial_profile(&spec, 4, Method::Exact);
         assert_eq!(prof.len(), 7);
         for b in prof {
             assert_eq!(b.mean, 1.0);
@@ -246,7 +264,7 @@ mod tests {
             assert!(b.stderr.is_some_and(|se| se > 0.0 && se < 0.5), "{b:?}");
         }
         // A flat annulus has no anisotropy to report (its variance is 0), rather than a floor in dB.
-        assert!(radial_profile(&spec, 0)
+        assert!(radial_profile(&spec, 0, Method::Exact)
             .iter()
             .all(|b| b.anisotropy_db.is_none()));
         // One realization has no spread to estimate: no standard error, not a zero one.
@@ -255,6 +273,8 @@ mod tests {
             stderr: vec![0.0; res * res],
             ..spec
         };
-        assert!(radial_profile(&one, 0).iter().all(|b| b.stderr.is_none()));
+        assert!(radial_profile(&one, 0, Method::Exact)
+            .iter()
+            .all(|b| b.stderr.is_none()));
     }
 }

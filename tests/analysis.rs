@@ -292,8 +292,8 @@ fn prediction_meets_measurement_in_4d_on_two_planes() {
 /// A sum of overlapping steps has no closed-form `∫f²`; its tail comes from a randomized-QMC `∫f²`.
 /// N-rooks at N = 256 with K = 4N: the prediction meets the measured MSE within 3 combined standard
 /// errors, and the grid's sum alone (what the prediction was before the tail had an estimate) misses
-/// it by more than 3. Measured: 1.013e-5 ± 3.3e-8 (tail 1.54e-6 ± 2.7e-8) against 1.031e-5 ± 2.2e-7
-/// (R = 4000): z = −0.8, the grid alone z = 7.8.
+/// it by more than 3. Measured: 1.013e-5 ± 3.1e-8 (tail 1.54e-6 ± 2.4e-8) against 1.031e-5 ± 2.2e-7
+/// (R = 4000): z = −0.8, the grid alone z = 7.9.
 #[test]
 fn prediction_meets_measurement_on_an_overlapping_sum() {
     let f = parse("step:c=0.3+step:theta=90,c=0.6").unwrap();

@@ -29,6 +29,9 @@ pub fn run(args: &IntegrandsArgs) -> Result<()> {
             "variance   {:.10e} (of f over the domain)",
             m - r.value * r.value
         );
+    } else if f.spectral_planes().is_none() {
+        // A pixel of the scene: each evaluation traces rays; its variance is what converge measures.
+        println!("variance   unknown in closed form (measure it with `anisospec converge`)");
     } else {
         let m = estimate_mean_square(f.as_ref());
         println!(

@@ -1843,13 +1843,14 @@ fn optimize_with_tol_zero_stops_cleanly() {
     assert!(json.contains("\"stop\": \"stopped:"), "{json}");
 }
 
-/// The C header's first line is the whole command: run again (to another file), it makes the same
-/// table, bit for bit, with the flags that change a table (--init, --latin, --max-iters, a loss
-/// weight, --eps) given away from their defaults.
+/// The C header's first line is the whole command: run again by a shell, it makes the same table, bit
+/// for bit, with the flags that change a table (--init, --latin, --max-iters, a loss weight, --eps)
+/// given away from their defaults and a path that needs quoting.
 #[test]
 fn c_header_names_the_command_that_makes_the_table() {
     let dir = tempfile::tempdir().unwrap();
-    let first = dir.path().join("first.npy");
+    // A space and a quote in the path: the command quotes them for the shell.
+    let table = dir.path().join("it's a table.npy");
     let o = anisospec(&[
         "optimize",
         "--target",
@@ -1868,17 +1869,18 @@ fn c_header_names_the_command_that_makes_the_table() {
         "--eps",
         "1e-6",
         "-o",
-        first.to_str().unwrap(),
+        table.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let header = std::fs::read_to_string(dir.path().join("first.h")).unwrap();
+    let first = std::fs::read(&table).unwrap();
+    let header = std::fs::read_to_string(table.with_extension("h")).unwrap();
     let line = header.lines().next().unwrap();
     let command = line
         .strip_prefix("/* anisospec ")
         .and_then(|l| l.strip_suffix(" */"))
         .unwrap_or_else(|| panic!("not a command: {line}"));
     for flag in [
-        "--init mj",
+        "--init=mj",
         "--latin",
         "--max-iters 4",
         "--annular-weight 0.5",
@@ -1886,16 +1888,16 @@ fn c_header_names_the_command_that_makes_the_table() {
     ] {
         assert!(command.contains(flag), "{flag} missing from {command}");
     }
-    let again = dir.path().join("again.npy");
-    let mut args: Vec<&str> = command.split_whitespace().collect();
-    let o_flag = args.iter().position(|a| *a == "-o").unwrap();
-    args[o_flag + 1] = again.to_str().unwrap();
-    let o = anisospec(&args);
+    // Run as written, by a POSIX shell, from the same folder: it writes the same table again.
+    std::fs::remove_file(&table).unwrap();
+    let o = Command::new("sh")
+        .arg("-c")
+        .arg(format!("\"$0\" {command}"))
+        .arg(env!("CARGO_BIN_EXE_anisospec"))
+        .output()
+        .expect("sh runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(
-        std::fs::read(&first).unwrap(),
-        std::fs::read(&again).unwrap()
-    );
+    assert_eq!(first, std::fs::read(&table).unwrap());
 }
 
 /// `variance` on a pixel of the scene (no Fourier coefficients) is refused before any work on the

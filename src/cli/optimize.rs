@@ -385,9 +385,11 @@ fn c_name(output: &Path) -> String {
     format!("anisospec_{}", crate::compare::report::slug(&stem))
 }
 
-/// The `anisospec optimize` command that makes this table again, every setting spelled out (defaults
-/// included, numbers in their shortest exact form), words with spaces or shell characters in single
-/// quotes.
+/// The `anisospec optimize` command that makes this table again when run from the same folder (its
+/// paths are as given), every setting spelled out (defaults included, numbers in their shortest exact
+/// form), for a POSIX shell: paths and names as `--flag=WORD`, so that none reads as a flag, and words
+/// with spaces or shell characters in single quotes. A run cut short by `--max-seconds` depends on
+/// the machine's speed, so its command may make a different table.
 fn command_line(args: &OptimizeArgs) -> String {
     fn word(s: &str) -> String {
         let plain = !s.is_empty()
@@ -400,15 +402,17 @@ fn command_line(args: &OptimizeArgs) -> String {
         }
     }
     let mut parts = vec![
-        "anisospec optimize --target".to_string(),
-        word(&args.target.to_string_lossy()),
+        format!(
+            "anisospec optimize --target={}",
+            word(&args.target.to_string_lossy())
+        ),
         format!(
             "--dims {} -n {} --sets {} --seed {}",
             args.dims, args.n, args.sets, args.seed
         ),
     ];
     if let Some(init) = &args.init {
-        parts.push(format!("--init {}", word(init)));
+        parts.push(format!("--init={}", word(init)));
     }
     if args.latin {
         parts.push("--latin".into());
@@ -427,12 +431,12 @@ fn command_line(args: &OptimizeArgs) -> String {
         format!("--eps {}", number(args.eps))
     });
     parts.push(format!(
-        "--max-iters {} --max-seconds {} --tol {} -o",
+        "--max-iters {} --max-seconds {} --tol {}",
         args.max_iters,
         number(args.max_seconds),
         number(args.tol)
     ));
-    parts.push(word(&args.output.to_string_lossy()));
+    parts.push(format!("--output={}", word(&args.output.to_string_lossy())));
     parts.join(" ")
 }
 

@@ -103,7 +103,8 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
         method,
     };
     let bar = crate::progress::bar(
-        (args.n.len() * args.realizations) as u64,
+        // Saturating: a count above the limit is refused inside, after the bar is made.
+        args.n.len().saturating_mul(args.realizations) as u64,
         "variance realizations",
     );
     let pred = predict_with_progress(sampler.as_ref(), f.as_ref(), &args.n, &cfg, &bar)?;

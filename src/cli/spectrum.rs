@@ -214,7 +214,6 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
     Ok(())
 }
 
-/// The refusal of `--stderr` over a single realization, whose standard error is 0 in every bin.
 /// Exact DFT terms (`N × K² × R`, one complex multiply-add each) above which `spectrum --exact` says
 /// what it has taken on: at the 3e8 to 1e9 terms a second per core measured on two AMD EPYC machines
 /// (benches/spectrum.rs), a minute or more on two cores.
@@ -243,6 +242,7 @@ fn duration(seconds: f64) -> String {
     }
 }
 
+/// The refusal of `--stderr` over a single realization, whose standard error is 0 in every bin.
 fn no_stderr(why: &str, fix: &str) -> Error {
     Error::Usage(format!(
         "--stderr needs 2 or more realizations ({why}, and one realization's spread is 0 in every bin); {fix}, or leave out --stderr"

@@ -195,8 +195,8 @@ fn is_staging(name: &std::ffi::OsStr) -> bool {
 /// during the run included), and links are removed, never followed. An earlier report from before the
 /// manifest (its `marker` and no manifest) has its files replaced but none pruned. The caller checks
 /// `dest` with [`check_report_folder`] before any work. On a failure before the move none of `dest`'s
-/// files is touched, `dest` and the ancestors this call created go again (while empty), and an error names the final
-/// path, not the temporary one. The manifest lists the earlier and the new files while they move, so
+/// files is touched, `dest` and the ancestors this call created go again (while empty), and an error
+/// names the final path, not the temporary one. The manifest lists the earlier and the new files while they move, so
 /// a failure while moving or pruning leaves new files beside old ones, all of which the next report
 /// can replace.
 pub fn write_folder<T>(

@@ -5,6 +5,15 @@ use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 use std::f64::consts::TAU;
 
+/// The relative error `ρ_F = (√2 N + 2π K + 1569) u` (`u = 2^−53`) of the Fourier sums of `n` points
+/// on a `res × res` grid at a bin where `|F| = N`, and `ρ_F N` the absolute error of any bin: the
+/// first-order bound derived step by step in [`crate::variance`] (phases, their sparse recurrence,
+/// the products and the sum over points).
+pub fn sum_error(n: usize, res: usize) -> f64 {
+    (std::f64::consts::SQRT_2 * n as f64 + 2.0 * std::f64::consts::PI * res as f64 + 1569.0)
+        * (f64::EPSILON / 2.0)
+}
+
 /// `exp(−2πi k c)`, computed directly: `k·c` is reduced mod 1 before scaling by 2π, so the argument
 /// stays small whatever `k` and `c`.
 pub fn phase(k: i64, c: f64) -> Complex64 {

@@ -65,20 +65,19 @@ pub struct RadialBin {
 
 /// How far `method`'s `P` may be off, for `n` points on a `res × res` grid: `(dark, flat)`, the
 /// absolute error of a bin whose true `P` is 0, and the relative error of any bin.
-/// - Exact DFT: each of the `N` terms of `F` errs by at most `ρ_F` (the bound derived in
-///   [`crate::variance`]'s `relative_error`: `ρ_F = (√2 N + 2π K + 1569) u`, `u = 2^−53`), so
-///   `|ΔF| ≤ ρ_F N`, a dark bin holds at most `ρ_F² N` and `P` errs by `2 ρ_F + 2 u` relative.
+/// - Exact DFT: each of the `N` terms of `F` errs by at most `ρ_F` ([`super::exact::sum_error`]),
+///   so `|ΔF| ≤ ρ_F N`, a dark bin holds at most `ρ_F² N` and `P` errs by `2 ρ_F + 2 u` relative.
 /// - NUFFT: the contract, `10·eps` relative on `P`; a dark bin holds at most `(10 eps)² N`, the error
 ///   of `F` being at most `10 eps N` when every point's error adds up (a lattice).
 pub fn precision(method: Method, n: usize, res: usize) -> (f64, f64) {
-    let n = n as f64;
+    let points = n as f64;
     match method {
         Method::Exact => {
-            let u = f64::EPSILON / 2.0;
-            let rho = (std::f64::consts::SQRT_2 * n + 2.0 * PI * res as f64 + 1569.0) * u;
-            (rho * rho * n, 2.0 * rho + 2.0 * u)
+            let rho = super::exact::sum_error(n, res);
+            // 2 u = f64::EPSILON.
+            (rho * rho * points, 2.0 * rho + f64::EPSILON)
         }
-        Method::Nufft { eps } => ((10.0 * eps).powi(2) * n, 10.0 * eps),
+        Method::Nufft { eps } => ((10.0 * eps).powi(2) * points, 10.0 * eps),
     }
 }
 

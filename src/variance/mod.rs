@@ -421,9 +421,7 @@ fn realizations(
 /// - `V_r` sums `m` non-negative terms `|f̂|² P / N` (each rounded by `2 u`), which adds `(m + 1) u`.
 fn relative_error(spec: &Spectrum, res: usize, n: usize, method: Method) -> f64 {
     let u = f64::EPSILON / 2.0;
-    let f_error =
-        (std::f64::consts::SQRT_2 * n as f64 + 2.0 * std::f64::consts::PI * res as f64 + 1569.0)
-            * u;
+    let f_error = crate::spectrum::exact::sum_error(n, res);
     let rounding = 2.0 * f_error + 2.0 * u;
     let nufft = match method {
         Method::Nufft { eps } => 10.0 * eps,

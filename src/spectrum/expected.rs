@@ -1,7 +1,7 @@
 //! Expected power spectra: the mean of `P(k)` over independent realizations, with its standard error
 //! (DESIGN §3).
 
-use super::{accumulate_power, check_res, Method};
+use super::{check_res, Method, PowerSums};
 use crate::error::{Error, Result};
 use crate::points::{project, PointSets, Projection};
 use crate::progress;
@@ -55,44 +55,41 @@ where
     }
     let bins = res * res;
     let bar = progress::bar(realizations as u64, label);
-    let mut sum = vec![0.0; bins];
-    let mut sum_sq = vec![0.0; bins];
+    let mut total = PowerSums::new(res, method);
     let mut n = 0;
     // Batches bound the memory; their boundaries do not change the summation order (chunk by
     // chunk, in order), so their size may follow the thread count without changing the bits.
     let per_batch = CHUNKS_PER_BATCH.min(CHUNKS_PER_THREAD * rayon::current_num_threads());
     let batch = CHUNK * per_batch;
-    // The partial sums of each chunk of a batch (sum, sum of squares, points per set), allocated
-    // once and zeroed per batch: fresh `K²` vectors per chunk page-faulted on every batch (the
-    // allocator hands the freed batch back to the system), ≈ 30 % of the time at K = 256.
-    let mut partial: Vec<(Vec<f64>, Vec<f64>, usize)> =
-        (0..realizations.div_ceil(CHUNK).min(per_batch))
-            .map(|_| (vec![0.0; bins], vec![0.0; bins], 0))
-            .collect();
+    // The partial sums of each chunk of a batch (and its points per set), allocated once and
+    // zeroed per batch: fresh vectors per chunk page-faulted on every batch (the allocator hands
+    // the freed batch back to the system), ≈ 30 % of the time at K = 256.
+    let mut partial: Vec<(PowerSums, usize)> = (0..realizations.div_ceil(CHUNK).min(per_batch))
+        .map(|_| (PowerSums::new(res, method), 0))
+        .collect();
     for start in (0..realizations).step_by(batch) {
         let end = (start + batch).min(realizations);
         let chunks = &mut partial[..(end - start).div_ceil(CHUNK)];
         chunks
             .par_iter_mut()
             .enumerate()
-            .for_each(|(c, (s, s2, count))| {
-                s.fill(0.0);
-                s2.fill(0.0);
+            .for_each(|(c, (sums, count))| {
+                sums.clear();
                 let c0 = start + c * CHUNK;
                 for r in c0..(c0 + CHUNK).min(end) {
                     let pts = draw(r);
                     *count = pts.len();
-                    accumulate_power(&pts, res, method, s, s2);
+                    sums.add(&pts);
                     bar.inc(1);
                 }
             });
-        for (s, s2, count) in chunks.iter() {
+        for (sums, count) in chunks.iter() {
             n = *count;
-            sum.iter_mut().zip(s).for_each(|(a, b)| *a += b);
-            sum_sq.iter_mut().zip(s2).for_each(|(a, b)| *a += b);
+            total.add_sums(sums);
         }
     }
     bar.finish_and_clear();
+    let (sum, sum_sq) = total.into_grids();
     let r = realizations as f64;
     let mean: Vec<f64> = sum.iter().map(|s| s / r).collect();
     let stderr = if realizations < 2 {

@@ -142,30 +142,84 @@ pub fn power(points: &[[f64; 2]], res: usize, method: Method) -> Vec<f64> {
     }
 }
 
-/// Adds the power spectrum of `points` to `sum` and its square to `sum_sq` (`res²` values each):
-/// `sum[i] += P[i]` and `sum_sq[i] += P[i]²` with `P` that of [`power`], bit for bit. With the NUFFT
-/// the rows of `P` go straight into the sums ([`Nufft2d::accumulate_power`]), without a `res²`
-/// spectrum written and read back. Panics as [`power`] does, and if a sum does not hold `res²`
-/// values.
-pub fn accumulate_power(
-    points: &[[f64; 2]],
+/// Sums of `P` and `P²` over the realizations of an expected spectrum (see [`expected`]), in the
+/// layout that is cheapest for the method: the `res²` grid for the exact DFT, the half plane
+/// `k2 ≥ 0` for the NUFFT, whose `P(k) = P(−k)` is exact by construction
+/// ([`Nufft2d::accumulate_power`]: half the sums read and written per set). [`PowerSums::into_grids`]
+/// gives both on the grid, with the bits of summing [`power`]'s output set by set in the same order.
+#[derive(Clone, Debug)]
+pub struct PowerSums {
     res: usize,
     method: Method,
-    sum: &mut [f64],
-    sum_sq: &mut [f64],
-) {
-    match method {
-        Method::Exact => {
-            assert!(
-                sum.len() == res * res && sum_sq.len() == res * res,
-                "accumulate_power needs sums of res² = {} values",
-                res * res
-            );
-            for ((s, q), p) in sum.iter_mut().zip(sum_sq).zip(power(points, res, method)) {
-                *s += p;
-                *q += p * p;
-            }
+    sum: Vec<f64>,
+    sum_sq: Vec<f64>,
+}
+
+impl PowerSums {
+    /// Zero sums on the `res × res` grid. Panics as [`power`] does on an invalid `res` or `eps`.
+    pub fn new(res: usize, method: Method) -> Self {
+        let len = match method {
+            Method::Exact => res * res,
+            Method::Nufft { .. } => nufft::half_plane_len(res),
+        };
+        PowerSums {
+            res,
+            method,
+            sum: vec![0.0; len],
+            sum_sq: vec![0.0; len],
         }
-        Method::Nufft { eps } => plan_or_panic(res, eps).accumulate_power(points, sum, sum_sq),
+    }
+
+    /// Sets both sums back to zero, keeping their memory.
+    pub fn clear(&mut self) {
+        self.sum.fill(0.0);
+        self.sum_sq.fill(0.0);
+    }
+
+    /// Adds the power spectrum of `points` (that of [`power`], bit for bit) and its square.
+    pub fn add(&mut self, points: &[[f64; 2]]) {
+        match self.method {
+            Method::Exact => {
+                let p = power(points, self.res, self.method);
+                for ((s, q), p) in self.sum.iter_mut().zip(&mut self.sum_sq).zip(p) {
+                    *s += p;
+                    *q += p * p;
+                }
+            }
+            Method::Nufft { eps } => plan_or_panic(self.res, eps).accumulate_power(
+                points,
+                &mut self.sum,
+                &mut self.sum_sq,
+            ),
+        }
+    }
+
+    /// Adds another set of sums of the same grid and method, entry by entry.
+    ///
+    /// Panics if `other` has another grid or method.
+    pub fn add_sums(&mut self, other: &PowerSums) {
+        assert!(
+            self.res == other.res && self.method == other.method,
+            "PowerSums of different grids or methods cannot be added"
+        );
+        self.sum
+            .iter_mut()
+            .zip(&other.sum)
+            .for_each(|(a, b)| *a += b);
+        self.sum_sq
+            .iter_mut()
+            .zip(&other.sum_sq)
+            .for_each(|(a, b)| *a += b);
+    }
+
+    /// The sums of `P` and of `P²` on the `res × res` grid (layout of this module).
+    pub fn into_grids(self) -> (Vec<f64>, Vec<f64>) {
+        match self.method {
+            Method::Exact => (self.sum, self.sum_sq),
+            Method::Nufft { .. } => (
+                nufft::expand_half_plane(&self.sum, self.res),
+                nufft::expand_half_plane(&self.sum_sq, self.res),
+            ),
+        }
     }
 }

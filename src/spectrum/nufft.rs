@@ -207,7 +207,7 @@ struct Scratch {
     cplx: Vec<Complex64>,
     row: Vec<Complex64>,
     fft: Vec<Complex64>,
-    /// Real work vector of the power path (see `Grid::power_rows`).
+    /// Real work vector of the power path (see `Grid::power_runs`).
     power: Vec<f64>,
 }
 
@@ -260,6 +260,38 @@ fn next_smooth_even(m: usize) -> usize {
         }
         c += 2;
     }
+}
+
+/// The number of values of a half-plane spectrum on the `res × res` grid: `(K/2 + 1)(K + 1)` (see
+/// [`expand_half_plane`]).
+pub fn half_plane_len(res: usize) -> usize {
+    (res / 2 + 1) * (res + 1)
+}
+
+/// The `res × res` grid (layout of [`crate::spectrum`]) of an even function `P(k) = P(−k)` held as its
+/// half plane `k2 ≥ 0`: entry `a (K + 1) + j` of `half_plane` is `P(j − K/2, a)` for `a = 0 ..= K/2`
+/// and `j = 0 ..= K`. Row `K/2 + a` of the grid is run `a`'s first `K` values, and row `K/2 − a`
+/// (`a > 0`) is run `a` reversed, its entry `j` being `P(K/2 − j, a)`; the values are copied, not
+/// recomputed, so the two mirrored bins have the same bits.
+///
+/// Panics if `half_plane` does not hold [`half_plane_len`]`(res)` values.
+pub fn expand_half_plane(half_plane: &[f64], res: usize) -> Vec<f64> {
+    let (k, half) = (res, res / 2);
+    assert_eq!(
+        half_plane.len(),
+        half_plane_len(k),
+        "a half plane on the {k} x {k} grid holds (K/2 + 1)(K + 1) values"
+    );
+    let mut full = vec![0.0; k * k];
+    for (a, run) in half_plane.chunks_exact(k + 1).enumerate() {
+        if a < half {
+            full[(half + a) * k..(half + a + 1) * k].copy_from_slice(&run[..k]);
+        }
+        if a > 0 {
+            copy_reversed(&mut full[(half - a) * k..(half - a + 1) * k], &run[1..]);
+        }
+    }
+    full
 }
 
 impl Nufft2d {
@@ -359,28 +391,28 @@ impl Nufft2d {
         self.power_on(self.pick(points.len()), points)
     }
 
-    /// Adds the power spectrum of `points` to `sum` and its square to `sum_sq` (`K²` values each,
-    /// layout of [`crate::spectrum`]): `sum[i] += P[i]` and `sum_sq[i] += P[i]²` with `P` bit for bit
-    /// that of [`Nufft2d::power`], for sums over realizations (see [`crate::spectrum::expected`]).
-    /// Each row of `P` goes into the sums while it is in cache, where [`Nufft2d::power`] followed by
-    /// a summing pass writes the `K²` spectrum out and reads it back. An empty set adds nothing
-    /// (`P = 0`).
+    /// Adds the power spectrum of `points` to `sum` and its square to `sum_sq`, both held as the half
+    /// plane `k2 ≥ 0` ([`half_plane_len`] values each; layout of [`expand_half_plane`]), for sums over
+    /// realizations (see [`crate::spectrum::expected`]). `P(k) = P(−k)`, so the half plane holds the
+    /// whole spectrum, and expanded it gives, bit for bit, the sums of [`Nufft2d::power`]'s output.
+    /// Each run of `P` goes into the sums while it is in cache, and only half the spectrum is read
+    /// and written per set. An empty set adds nothing (`P = 0`).
     ///
-    /// Panics if `sum` or `sum_sq` does not hold `K²` values.
+    /// Panics if `sum` or `sum_sq` does not hold [`half_plane_len`] values.
     pub fn accumulate_power(&self, points: &[[f64; 2]], sum: &mut [f64], sum_sq: &mut [f64]) {
         let k = self.res;
+        let len = half_plane_len(k);
         assert!(
-            sum.len() == k * k && sum_sq.len() == k * k,
-            "accumulate_power needs sums of K² = {} values",
-            k * k
+            sum.len() == len && sum_sq.len() == len,
+            "accumulate_power needs half-plane sums of (K/2 + 1)(K + 1) = {len} values"
         );
         if points.is_empty() {
             return;
         }
         let grid = self.pick(points.len());
-        grid.power_rows(points, 1.0 / points.len() as f64, |i, p| {
-            let rows = i * k..(i + 1) * k;
-            for ((s, q), p) in sum[rows.clone()].iter_mut().zip(&mut sum_sq[rows]).zip(p) {
+        grid.power_runs(points, 1.0 / points.len() as f64, |a, p| {
+            let run = a * (k + 1)..(a + 1) * (k + 1);
+            for ((s, q), p) in sum[run.clone()].iter_mut().zip(&mut sum_sq[run]).zip(p) {
                 *s += p;
                 *q += p * p;
             }
@@ -905,17 +937,17 @@ impl Grid {
         });
     }
 
-    /// The power spectrum `P = |F|² / N` of type 1 with unit weights, row by row: `emit(i, P)` gets
-    /// each output row `i` (`k2 = i − K/2`, all `k1`; layout of [`crate::spectrum`]) exactly once, in
-    /// no particular order; `inv_n = 1/N`.
+    /// The power spectrum `P = |F|² / N` of type 1 with unit weights, as the `K/2 + 1` runs of the
+    /// half plane `k2 ≥ 0`: `emit(a, run)` gets, for each `a = 0 ..= K/2` exactly once and in no
+    /// particular order, `run[j] = P(j − K/2, a)` for `j = 0 ..= K` (one more value than a row, so
+    /// that each row of the grid, `k2 ≥ 0` or its mirror `k2 < 0`, is a contiguous part of one run:
+    /// see [`expand_half_plane`]); `inv_n = 1/N`.
     ///
     /// Only the modulus matters, so each bin takes one real factor instead of a complex
     /// deconvolution: `P = |B|² · (corr[|k1|]² · corr[|k2|]² / N)` with `B` the transformed fine grid
-    /// (the squares `corr[|k1|]²` are tabulated at planning time, in row order, so that the loops run
-    /// forward and vectorize). Line `k2 = a ≥ 0` gives the run `P(k1, a)`, `k1 = −K/2 ..= K/2` (one
-    /// more than a row): its first `K` values are row `a`, and by `P(k) = P(−k)` for real weights
-    /// the run reversed, made while it is in cache, is row `−a`.
-    fn power_rows(&self, points: &[[f64; 2]], inv_n: f64, mut emit: impl FnMut(usize, &[f64])) {
+    /// (the squares `corr[|k1|]²` are tabulated at planning time, in run order, so that the loops run
+    /// forward and vectorize).
+    fn power_runs(&self, points: &[[f64; 2]], inv_n: f64, mut emit: impl FnMut(usize, &[f64])) {
         let (n, k) = (self.n, self.res);
         let half = k / 2;
         self.type1_lines(
@@ -924,32 +956,43 @@ impl Grid {
             |lines, fft, _, work| {
                 // Complex FFT along x for each kept k2 (batched: K/2 + 1 lines of n).
                 self.fwd.process_with_scratch(lines, fft);
-                fit(work, 2 * k + 1);
-                let (run, rev) = work.split_at_mut(k + 1);
+                fit(work, k + 1);
                 let fac = &self.corr_sq_run;
                 for a in 0..=half {
                     let line = &lines[a * n..(a + 1) * n];
                     let r = self.corr[a] * self.corr[a] * inv_n;
                     // k1 < 0 is at index n + k1 of the line, k1 ≥ 0 at index k1.
-                    let (lo, hi) = run.split_at_mut(half);
+                    let (lo, hi) = work.split_at_mut(half);
                     for ((o, f), c) in lo.iter_mut().zip(&line[n - half..]).zip(&fac[..half]) {
                         *o = f.norm_sqr() * (c * r);
                     }
                     for ((o, f), c) in hi.iter_mut().zip(&line[..=half]).zip(&fac[half..]) {
                         *o = f.norm_sqr() * (c * r);
                     }
-                    // Row +K/2 is not in the grid; row 0 is its own mirror.
-                    if a < half {
-                        emit(half + a, &run[..k]);
-                    }
-                    if a > 0 {
-                        // P(k1, −a) = P(−k1, a): entry j is run[K − j].
-                        copy_reversed(&mut rev[..k], &run[1..]);
-                        emit(half - a, &rev[..k]);
-                    }
+                    emit(a, &work[..]);
                 }
             },
         );
+    }
+
+    /// [`Grid::power_runs`] as rows of the full grid: `emit(i, P)` gets each output row `i`
+    /// (`k2 = i − K/2`, all `k1`; layout of [`crate::spectrum`]) exactly once, in no particular
+    /// order. Run `a` gives row `K/2 + a` (its first `K` values) and, reversed while in cache, row
+    /// `K/2 − a`: by `P(k) = P(−k)` for real weights, entry `j` of that row is `run[K − j]`.
+    fn power_rows(&self, points: &[[f64; 2]], inv_n: f64, mut emit: impl FnMut(usize, &[f64])) {
+        let k = self.res;
+        let half = k / 2;
+        let mut rev = vec![0.0; k];
+        self.power_runs(points, inv_n, |a, run| {
+            // Row +K/2 is not in the grid; row 0 is its own mirror.
+            if a < half {
+                emit(half + a, &run[..k]);
+            }
+            if a > 0 {
+                copy_reversed(&mut rev, &run[1..]);
+                emit(half - a, &rev);
+            }
+        });
     }
 
     /// Spreads the points and runs the row stage, then hands `body` the `K/2 + 1` lines (line `k2`
@@ -1201,7 +1244,8 @@ mod tests {
 
     #[test]
     fn accumulated_power_has_the_bits_of_power() {
-        // Sums of P and P² over sets (one empty) against the sums of `power`'s output, bit for bit.
+        // Half-plane sums of P and P² over sets (one empty), expanded, against the sums of `power`'s
+        // output, bit for bit.
         let mut rng = crate::rng::stream(55, 0);
         let sets: Vec<Vec<[f64; 2]>> = [150, 0, 90]
             .iter()
@@ -1213,8 +1257,9 @@ mod tests {
             .collect();
         for res in [2, 6, 50] {
             let plan = Nufft2d::new(res, 1e-6).unwrap();
-            let (mut sum, mut sum_sq) = (vec![0.0; res * res], vec![0.0; res * res]);
-            let (mut want, mut want_sq) = (sum.clone(), sum_sq.clone());
+            let len = half_plane_len(res);
+            let (mut sum, mut sum_sq) = (vec![0.0; len], vec![0.0; len]);
+            let (mut want, mut want_sq) = (vec![0.0; res * res], vec![0.0; res * res]);
             for pts in &sets {
                 plan.accumulate_power(pts, &mut sum, &mut sum_sq);
                 for ((s, q), p) in want.iter_mut().zip(&mut want_sq).zip(plan.power(pts)) {
@@ -1223,8 +1268,10 @@ mod tests {
                 }
             }
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-            assert_eq!(bits(&sum), bits(&want), "K={res}: sums");
-            assert_eq!(bits(&sum_sq), bits(&want_sq), "K={res}: sums of squares");
+            let full = expand_half_plane(&sum, res);
+            let full_sq = expand_half_plane(&sum_sq, res);
+            assert_eq!(bits(&full), bits(&want), "K={res}: sums");
+            assert_eq!(bits(&full_sq), bits(&want_sq), "K={res}: sums of squares");
         }
     }
 

@@ -1924,10 +1924,31 @@ fn variance_refuses_a_pixel_before_rendering_it() {
 
 /// Two optimized tables' C headers can be included in one C file (and each twice): the include guard,
 /// the macros and the array are named after the file, `anisospec_` and its stem as a C identifier.
+/// Two tables whose names give the same identifier (`Fan-A`, `fan_a`) do not compile together: the
+/// guard carries a hash of the numbers, so the second is not silently skipped. A name with no ASCII
+/// letter or digit, which would give the bare prefix, is refused.
 #[test]
 fn c_headers_of_two_tables_live_in_one_file() {
     let dir = tempfile::tempdir().unwrap();
-    for (file, sets) in [("Fan-A.npy", "2"), ("2nd table.npy", "1")] {
+    let bare = dir.path().join("ü.npy");
+    rejects(
+        &[
+            "optimize",
+            "--target",
+            "targets/blue-noise.toml",
+            "-n",
+            "16",
+            "-o",
+            bare.to_str().unwrap(),
+        ],
+        "no ASCII letter or digit",
+        &bare,
+    );
+    for (file, sets) in [
+        ("Fan-A.npy", "2"),
+        ("2nd table.npy", "1"),
+        ("fan_a.npy", "1"),
+    ] {
         let o = anisospec(&[
             "optimize",
             "--target",
@@ -1947,8 +1968,15 @@ fn c_headers_of_two_tables_live_in_one_file() {
     let b = std::fs::read_to_string(dir.path().join("2nd table.h")).unwrap();
     for (text, name, sets) in [(&a, "anisospec_fan_a", 2), (&b, "anisospec_2nd_table", 1)] {
         let upper = name.to_uppercase();
+        let guard = text.lines().find(|l| l.starts_with("#ifndef ")).unwrap();
+        let hash = guard
+            .strip_prefix(&format!("#ifndef {upper}_H_"))
+            .unwrap_or_else(|| panic!("{name}: guard '{guard}'"));
+        assert!(
+            hash.len() == 16 && hash.chars().all(|c| c.is_ascii_hexdigit()),
+            "{guard}"
+        );
         for line in [
-            format!("#ifndef {upper}_H"),
             format!("#define {upper}_SETS {sets}"),
             format!("#define {upper}_N 16"),
             format!("#define {upper}_DIMS 2"),
@@ -1979,6 +2007,23 @@ fn c_headers_of_two_tables_live_in_one_file() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // fan_a.h declares the same names with other numbers: a compile error, not a skipped header.
+    std::fs::write(
+        dir.path().join("clash.c"),
+        "#include \"Fan-A.h\"\n#include \"fan_a.h\"\n",
+    )
+    .unwrap();
+    let o = Command::new("cc")
+        .current_dir(dir.path())
+        .args(["-std=c11", "-c", "clash.c", "-o", "clash.o"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success(), "Fan-A.h and fan_a.h compiled together");
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("anisospec_fan_a"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
 
 /// An output's extension is matched in any case, and the file is written at exactly the path given:
@@ -2690,6 +2735,16 @@ fn negative_counts_are_named_by_their_flag() {
             vec!["spectrum", "--sampler", "random", "-n", "16"],
         ),
         ("--sets", vec!["sample", "--sampler", "random", "-n", "16"]),
+        (
+            "--max-iters",
+            vec![
+                "optimize",
+                "--target",
+                "targets/blue-noise.toml",
+                "-n",
+                "16",
+            ],
+        ),
     ] {
         let mut args = extra.clone();
         args.extend([flag, "-2", "-o", o]);
@@ -2727,6 +2782,8 @@ fn negative_reals_reach_their_flags_check() {
             "optimize",
             "--target",
             "targets/blue-noise.toml",
+            "--dims",
+            "4",
             "-n",
             "16",
             flag,
@@ -2736,6 +2793,72 @@ fn negative_reals_reach_their_flags_check() {
         ];
         rejects(&args, message, &out);
     }
+}
+
+/// A 2D table has no xy and uv strata: `--strat-radius` and `--strat-weight` are refused by name there,
+/// not recorded in the sidecar and the header's command as if they had been used.
+#[test]
+fn two_d_tables_refuse_the_strata_flags() {
+    let (_dir, out) = tmp("t.npy");
+    let o = out.to_str().unwrap();
+    for (flags, needle) in [
+        (
+            vec!["--strat-weight", "3"],
+            "--strat-weight sets the 4D loss",
+        ),
+        (
+            vec!["--strat-radius", "0.2", "--strat-weight", "3"],
+            "--strat-radius and --strat-weight set the 4D loss",
+        ),
+    ] {
+        let mut args = vec![
+            "optimize",
+            "--target",
+            "targets/blue-noise.toml",
+            "-n",
+            "16",
+        ];
+        args.extend(flags);
+        args.extend(["-o", o]);
+        rejects(&args, needle, &out);
+    }
+}
+
+/// A run stopped by `--max-seconds` depends on the machine's speed: it says so on stderr and in the C
+/// header, under the command that would not remake it; the sidecar records the shape's weights in
+/// use (the defaults, which the target file leaves out).
+#[test]
+fn optimize_says_when_the_time_limit_stopped_it() {
+    let (dir, out) = tmp("t.npy");
+    let o = anisospec(&[
+        "optimize",
+        "--target",
+        "targets/blue-noise.toml",
+        "-n",
+        "256",
+        "--sets",
+        "2",
+        "--max-seconds",
+        "1e-9",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("warning: 2 of 2 sets stopped at --max-seconds (1e-9 s)"),
+        "{err}"
+    );
+    let header = std::fs::read_to_string(dir.path().join("t.h")).unwrap();
+    let second = header.lines().nth(1).unwrap();
+    assert!(
+        second.starts_with("/* 2 of 2 sets stopped at --max-seconds"),
+        "{second}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("t.json")).unwrap()).unwrap();
+    assert_eq!(json["parameters"]["dark_weight"], 8.0);
+    assert_eq!(json["parameters"]["falloff"], 0.0);
 }
 
 /// A lattice design searches lattices and moves no points: the flags of the point optimizer (a start,

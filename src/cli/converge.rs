@@ -29,8 +29,8 @@ pub struct ConvergeArgs {
         allow_negative_numbers = true
     )]
     pub n: Vec<usize>,
-    /// Realizations per N (R): each an independent set with its own random toroidal shift (made
-    /// before --shear shears it); 2 to 1000000.
+    /// Realizations per N (R): each an independent draw of a set (for a table, one of its sets picked
+    /// at random) with its own random toroidal shift (made before --shear shears it); 2 to 1000000.
     #[arg(long, default_value_t = 100, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub realizations: usize,
     /// Random seed: the same seed gives the same numbers whatever the thread count.

@@ -2,6 +2,7 @@
 //! header) with a JSON sidecar and a CSV log.
 
 use crate::error::{number, Error, Result};
+use crate::optimize::solver::TIME_LIMIT_STOP;
 use crate::optimize::{
     self, lattice_design, loss::Repulsion, metrics, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
     DEFAULT_LIMITS, DEFAULT_REPULSION, DEFAULT_STRATA,
@@ -42,7 +43,9 @@ pub struct OptimizeArgs {
     pub seed: u64,
     /// Output table, `.npy` ([sets, N, D] float64); the same numbers go to `.txt`, `.h`, a `.json`
     /// sidecar and a `.log.csv` next to it. The C header's array is named after the file:
-    /// `-o out/fan.npy` gives `anisospec_fan` and the macros `ANISOSPEC_FAN_SETS`, `_N`, `_DIMS`.
+    /// `-o out/fan.npy` gives `anisospec_fan` and the macros `ANISOSPEC_FAN_SETS`, `_N`, `_DIMS`
+    /// (the file name needs an ASCII letter or digit); its include guard carries a hash of the
+    /// numbers, so two tables whose names give the same C name fail to compile together.
     #[arg(short = 'o', long)]
     pub output: PathBuf,
     /// Draw the starting sets from this sampler (e.g. mj, jittered; see `anisospec samplers`)
@@ -79,8 +82,8 @@ pub struct OptimizeArgs {
     /// NUFFT tolerance for the loss and its gradient, from 1e-12 to 1e-1.
     #[arg(long, default_value = "1e-8", allow_negative_numbers = true)]
     pub eps: f64,
-    /// Largest number of solver iterations per set.
-    #[arg(long, default_value_t = DEFAULT_LIMITS.max_iters)]
+    /// Largest number of solver iterations per set (0 writes the starting sets unmoved).
+    #[arg(long, default_value_t = DEFAULT_LIMITS.max_iters, value_parser = parse_iterations, allow_negative_numbers = true)]
     pub max_iters: u64,
     /// Largest wall time per set, in seconds, at most 1e9 (results depend on machine speed only if
     /// this binds).
@@ -95,6 +98,11 @@ pub struct OptimizeArgs {
 /// tolerance of the loss and its gradient.
 const DEFAULT_EPS: f64 = 1e-8;
 
+/// Parses `--max-iters`: a whole number, 0 or more.
+fn parse_iterations(text: &str) -> std::result::Result<u64, String> {
+    crate::cli::parse_whole(text).map(|v| v as u64)
+}
+
 /// The largest `--max-seconds` accepted (about 31 years): a limit, not a schedule.
 const MAX_SECONDS: f64 = 1e9;
 
@@ -105,6 +113,7 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
         "npy",
         "the table as numpy, and the .txt, .h, .json and .log.csv next to it",
     )?;
+    c_name(&args.output)?;
     if args.sets == 0 {
         return Err(Error::Usage(
             "--sets 0 asks for nothing; give at least one set".into(),
@@ -132,6 +141,23 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
     }
     if !args.exact {
         Method::nufft(args.eps)?;
+    }
+    if args.dims == 2 {
+        let given: Vec<String> = [
+            (args.strat_radius != DEFAULT_STRATA.radius, "--strat-radius"),
+            (args.strat_weight != DEFAULT_STRATA.weight, "--strat-weight"),
+        ]
+        .into_iter()
+        .filter_map(|(is_given, flag)| is_given.then(|| flag.to_string()))
+        .collect();
+        if !given.is_empty() {
+            return Err(Error::Usage(format!(
+                "{} set{} the 4D loss's xy and uv stratification terms, which a 2D table does not have; leave {} out, or ask for 4D sets with --dims 4",
+                super::spoken_list(&given, "and"),
+                if given.len() == 1 { "s" } else { "" },
+                if given.len() == 1 { "it" } else { "them" }
+            )));
+        }
     }
     Ok(())
 }
@@ -246,9 +272,14 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         latin: args.latin,
         annular_weight: args.annular_weight,
     };
-    let objective = setup.objective()?;
+    // A target beyond reach at this N is the file's problem: say which file.
+    let in_file = |e: Error| match e {
+        Error::Input(m) => Error::Input(format!("{}: {m}", args.target.display())),
+        other => other,
+    };
+    let objective = setup.objective().map_err(in_file)?;
     // The wider grid the fit is also judged on, checked before any work.
-    let wide = target.check_grid(args.n)?;
+    let wide = target.check_grid(args.n).map_err(in_file)?;
     let t0 = Instant::now();
     let (points, reports, lattice) = match &target {
         Target::Variance(v) if v.design() == Design::Lattice => {
@@ -266,6 +297,17 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         }
     };
     let seconds = t0.elapsed().as_secs_f64();
+    let timed_out = reports
+        .iter()
+        .filter(|r| r.stop.starts_with(TIME_LIMIT_STOP))
+        .count();
+    if timed_out > 0 {
+        eprintln!(
+            "warning: {timed_out} of {} sets stopped at --max-seconds ({} s) before the solver's other limits; the table depends on this machine's speed, and the command in its header may make another; raise --max-seconds",
+            args.sets,
+            number(args.max_seconds)
+        );
+    }
 
     let mut fits = Vec::new();
     for term in &objective.terms {
@@ -287,6 +329,10 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             "strata": setup.strata, "repulsion": { "radius": setup.repulsion.radius, "weight": setup.repulsion.weight },
             "limits": setup.limits, "init": setup.init, "latin": setup.latin,
             "annular_weight": setup.annular_weight,
+            // The shape's weights in use, defaults filled in (the target above shows null for a key
+            // the file leaves out); a variance target has none.
+            "dark_weight": (!matches!(target, Target::Variance(_))).then(|| target.dark_weight()),
+            "falloff": (!matches!(target, Target::Variance(_))).then(|| target.falloff()),
             "grid_res": objective.terms.iter().map(|t| t.grid.res).collect::<Vec<_>>(),
         },
         "final_loss": {
@@ -306,7 +352,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     write_group(&refs, |staged| {
         write_points(&staged(&outputs[0]), &points)?;
         write_points(&staged(&outputs[1]), &points)?;
-        write_header(&staged(&outputs[2]), &points, args)?;
+        write_header(&staged(&outputs[2]), &points, args, timed_out)?;
         write_atomic(&staged(&outputs[3]), |w| writeln!(w, "{text}"))?;
         write_atomic(&staged(&outputs[4]), |w| {
             writeln!(w, "set,iter,seconds,loss,solver")?;
@@ -379,10 +425,18 @@ fn optimize_with_bar(
 /// The C name of the table `-o output`: `anisospec_` and the file stem, lower case, with every run
 /// of characters that are not ASCII letters or digits made one `_` (the report's `slug`:
 /// `out/Fan-A.npy` → `anisospec_fan_a`), so that tables of different names can be included in one
-/// C file.
-fn c_name(output: &Path) -> String {
+/// C file. A stem with no ASCII letter or digit (`ü.npy`) is refused: its name would be the bare
+/// prefix, shared by every such table.
+fn c_name(output: &Path) -> Result<String> {
     let stem = output.file_stem().unwrap_or_default().to_string_lossy();
-    format!("anisospec_{}", crate::compare::report::slug(&stem))
+    let slug = crate::compare::report::slug(&stem);
+    if slug.is_empty() {
+        return Err(Error::Usage(format!(
+            "-o {}: the C header names its array after the file name, which has no ASCII letter or digit; choose a name such as table.npy",
+            output.display()
+        )));
+    }
+    Ok(format!("anisospec_{slug}"))
 }
 
 /// The `anisospec optimize` command that makes this table again when run from the same folder (its
@@ -441,15 +495,47 @@ fn command_line(args: &OptimizeArgs) -> String {
 }
 
 /// A C header with the same numbers as the npy table: `static const double NAME[sets][n][dims]` and
-/// the macros `NAME_SETS`, `NAME_N`, `NAME_DIMS` (upper case), inside the include guard `NAME_H`, with
-/// `NAME` from [`c_name`] of `-o`; its first line, a comment, is the [`command_line`] of the run.
-fn write_header(path: &Path, points: &PointSets, args: &OptimizeArgs) -> Result<()> {
-    let name = c_name(&args.output);
+/// the macros `NAME_SETS`, `NAME_N`, `NAME_DIMS` (upper case), with `NAME` from [`c_name`] of `-o`.
+/// Its first line, a comment, is the [`command_line`] of the run; a second says when `timed_out`
+/// sets stopped at `--max-seconds`; a third what the numbers are and how a renderer uses them. The
+/// include guard `NAME_H_HASH` carries a hash of the numbers: two different tables whose file names
+/// give the same `NAME` (`fan-a.npy`, `fan_a.npy`) then fail to compile together (a redefinition)
+/// instead of one silently hiding the other, and the same table included twice is read once.
+fn write_header(
+    path: &Path,
+    points: &PointSets,
+    args: &OptimizeArgs,
+    timed_out: usize,
+) -> Result<()> {
+    let name = c_name(&args.output)?;
     let upper = name.to_ascii_uppercase();
+    let bytes: Vec<u8> = points.data().iter().flat_map(|c| c.to_le_bytes()).collect();
+    let guard = format!("{upper}_H_{:016X}", crate::output::stable_hash(&bytes));
+    let coordinates = if points.dims() == 4 {
+        "(x, y, u, v), x and y on the pixel, u and v on the lens, the target met on xu and yv"
+    } else {
+        "the two whose spectrum meets the target, the first along k1"
+    };
     write_atomic(path, |w| {
         // A comment ends at the first "*/": a path holding one is broken up.
         writeln!(w, "/* {} */", command_line(args).replace("*/", "* /"))?;
-        writeln!(w, "#ifndef {upper}_H\n#define {upper}_H")?;
+        if timed_out > 0 {
+            writeln!(
+                w,
+                "/* {timed_out} of {} sets stopped at --max-seconds: the command above may make another table on another machine or run. */",
+                points.sets()
+            )?;
+        }
+        writeln!(
+            w,
+            "/* {name}[set][point][dim]: {} of {} points in {}D, each coordinate in [0, 1): {coordinates}. \
+             Each estimate takes one set and adds a random toroidal shift to it (mod 1); a table made for \
+             the depth oracle's shear (--latin) is then moved through the seam-free shear of DESIGN section 5. */",
+            crate::cli::counted(points.sets(), "set"),
+            points.n(),
+            points.dims()
+        )?;
+        writeln!(w, "#ifndef {guard}\n#define {guard}")?;
         writeln!(w, "#define {upper}_SETS {}", points.sets())?;
         writeln!(w, "#define {upper}_N {}", points.n())?;
         writeln!(w, "#define {upper}_DIMS {}", points.dims())?;

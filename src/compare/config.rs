@@ -47,7 +47,8 @@ pub struct CompareConfig {
     pub realizations: usize,
     /// Seed of every random choice.
     pub seed: u64,
-    /// Classical 4D samplers, used as they are (see `anisospec samplers`).
+    /// Classical 4D samplers, used as they are (see `anisospec samplers`); the best of them is what
+    /// every gain is against, so tables (`table:PATH`) go in `sheared`, not here.
     pub classical: Vec<String>,
     /// 4D samplers sheared by each integrand's shear ([`super::Subject::shear`]), once per mode in
     /// `shear_modes`.
@@ -263,6 +264,11 @@ impl CompareConfig {
             return Err(Error::Usage(
                 "classical is empty, but every gain in the report is against the best classical sampler; list at least one, e.g. classical = [\"padded-jittered\"]".into(),
             ));
+        }
+        if let Some(table) = self.classical.iter().find(|s| s.starts_with("table:")) {
+            return Err(Error::Usage(format!(
+                "classical lists '{table}', a table, but every gain in the report is against the best classical sampler; list the table in sheared = [...] (used through the oracle's shear, as the suite's own tables are), or its target file in tables = [...]"
+            )));
         }
         for (key, list) in [("classical", &self.classical), ("sheared", &self.sheared)] {
             let built = list
@@ -614,6 +620,12 @@ mod tests {
         let m = twice("sheared", &["sobol", "padded-mj", "sobol"]);
         assert!(
             m.contains("sheared lists 'sobol' twice; give each sampler once"),
+            "{m}"
+        );
+        // A table is no classical sampler: every gain is against the best of those.
+        let m = twice("classical", &["sobol", "table:t.npy"]);
+        assert!(
+            m.contains("classical lists 'table:t.npy', a table") && m.contains("sheared = [...]"),
             "{m}"
         );
         // One sampler both classical and sheared is two different rows, and allowed.

@@ -121,13 +121,6 @@ pub fn start_sampler(n: usize) -> &'static str {
     }
 }
 
-/// FNV-1a, 64 bits: a cache key that stays the same across builds and platforms.
-fn fnv1a(text: &str) -> u64 {
-    text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
-        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
-    })
-}
-
 impl TableCache {
     /// Tables of `config.table_sets` sets, cached under `cache_dir/tables`.
     pub fn new(config: &CompareConfig, cache_dir: &Path) -> Self {
@@ -189,9 +182,10 @@ impl TableCache {
         let stem = source
             .file_stem()
             .map_or_else(|| "table".into(), |s| s.to_string_lossy().into_owned());
-        let path = self
-            .dir
-            .join(format!("{stem}_n{n}_{:016x}.npy", fnv1a(&key)));
+        let path = self.dir.join(format!(
+            "{stem}_n{n}_{:016x}.npy",
+            crate::output::stable_hash(key.as_bytes())
+        ));
         let meta = path.with_extension("json");
         if let (true, Ok(text)) = (path.is_file(), std::fs::read_to_string(&meta)) {
             if let Ok(m) = serde_json::from_str::<serde_json::Value>(&text) {

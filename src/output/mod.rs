@@ -11,6 +11,14 @@ use crate::error::{Error, Result};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+/// FNV-1a, 64 bits, of `bytes`: a stable hash for cache file names and header guards (std's hasher
+/// is not stable across releases or platforms).
+pub fn stable_hash(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
 /// The folder a file `path` goes in: its parent, or `.` for a bare file name.
 fn folder_of(path: &Path) -> &Path {
     match path.parent() {

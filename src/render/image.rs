@@ -7,7 +7,7 @@
 //! estimate is unbiased.
 
 use super::oracle::{PixelClass, PixelOracle};
-use super::pixel::{check_ref_count, fnv1a, stratified_reference, RENDER_VERSION};
+use super::pixel::{check_ref_count, stratified_reference, RENDER_VERSION};
 use super::scene::Scene;
 use crate::error::{Error, Result};
 use crate::points::shear::{shear_set_4d, ShearMode};
@@ -153,7 +153,10 @@ impl ReferenceImage {
 /// The cache file of a scene's reference image at `count` rays per pixel.
 fn reference_cache_file(scene: &Scene, count: usize, dir: &Path) -> PathBuf {
     let key = format!("v{RENDER_VERSION} {} count={count}", scene.config().key());
-    dir.join(format!("image-{:016x}.npy", fnv1a(&key)))
+    dir.join(format!(
+        "image-{:016x}.npy",
+        crate::output::stable_hash(key.as_bytes())
+    ))
 }
 
 /// The reference image at `count` rays per pixel (power of two, see [`check_ref_count`]): read from the

@@ -73,13 +73,6 @@ where
     Reference { value, stderr }
 }
 
-/// FNV-1a, 64 bits: a stable hash for cache file names (std's hasher is not stable across releases).
-pub(crate) fn fnv1a(text: &str) -> u64 {
-    text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
-}
-
 /// The integrand of pixel `(px, py)` of a scene: `f(x, y, u, v)` is the radiance along the thin-lens
 /// ray through pixel point `(x, y)` and lens point `(u, v)` (see [`super::camera`]).
 pub struct PixelIntegrand {
@@ -161,7 +154,10 @@ impl PixelIntegrand {
     }
 
     fn cache_file(&self, dir: &Path, key: &str) -> PathBuf {
-        dir.join(format!("pixel-{:016x}.json", fnv1a(key)))
+        dir.join(format!(
+            "pixel-{:016x}.json",
+            crate::output::stable_hash(key.as_bytes())
+        ))
     }
 
     fn compute_reference(&self) -> Reference {

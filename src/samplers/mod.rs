@@ -339,13 +339,13 @@ pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
         // A pairing family is 4D whatever its 2D name; say so first, then whether the name exists.
         if let Some((prefix, inner)) = pairing_parts(name) {
             return Err(Error::Usage(format!(
-                "sampler '{name}' makes 4D sets ({prefix}-NAME pairs two 2D sets), but 2D sets are asked here; ask for 4D (--dims 4 in sample and spectrum, a 4D integrand in variance and converge){}",
+                "sampler '{name}' makes 4D sets ({prefix}-NAME pairs two 2D sets), but 2D sets are asked here; ask for 4D (--dims 4 in sample, spectrum and optimize, a 4D integrand in variance and converge){}",
                 unknown_inner(inner)
             )));
         }
         if names_in(4).iter().any(|n| n == name) {
             return Err(Error::Usage(format!(
-                "sampler '{name}' makes 4D sets, but 2D sets are asked here; ask for 4D (--dims 4 in sample and spectrum, a 4D integrand in variance and converge) or use one of the 2D samplers: {}",
+                "sampler '{name}' makes 4D sets, but 2D sets are asked here; ask for 4D (--dims 4 in sample, spectrum and optimize, a 4D integrand in variance and converge) or use one of the 2D samplers: {}",
                 NAMES_2D.join(", ")
             )));
         }

@@ -29,6 +29,44 @@ use std::path::{Path, PathBuf};
 pub mod variance;
 pub use variance::Variance;
 
+/// The values of a target file's `kind`.
+const KINDS: [&str; 5] = [
+    "hairline",
+    "double-wedge",
+    "blue-noise",
+    "image",
+    "variance",
+];
+
+/// A key error of [`Target::parse`] (`"invalid type: …\nin `radius`\n"`) as one line that names the
+/// key and the line of `text` it is on: `invalid type: … (key radius, line 3)`.
+fn located(error: &str, text: &str) -> String {
+    let mut lines = error.trim_end().lines();
+    let what = lines.next().unwrap_or_default().to_string();
+    // A value of the wrong type names its key on a line of its own; an unknown key in the message.
+    fn named(l: &str) -> Option<&str> {
+        l.strip_prefix("in `").and_then(|k| k.strip_suffix('`'))
+    }
+    let unknown = what
+        .strip_prefix("unknown field `")
+        .and_then(|rest| rest.split('`').next());
+    let Some(key) = lines.find_map(named).or(unknown) else {
+        return what;
+    };
+    // The line of the top-level key the path starts with (a bare key, or a table header).
+    let first = key.split('.').next().unwrap_or(key);
+    let line = text.lines().position(|l| {
+        let l = l.trim_start();
+        l.strip_prefix(first)
+            .is_some_and(|rest| rest.trim_start().starts_with('='))
+            || l.trim_start_matches('[').trim_start().starts_with(first) && l.starts_with('[')
+    });
+    match line {
+        Some(i) => format!("{what} (key {key}, line {})", i + 1),
+        None => format!("{what} (key {key})"),
+    }
+}
+
 /// The largest number of dark cells, in units of `N`, that a target may ask of `N` points.
 pub const REACH: f64 = 1.0;
 
@@ -296,13 +334,35 @@ impl Target {
     }
 
     /// Parses and checks a target from TOML text. Image pixels are not read (see [`Target::load`]).
+    ///
+    /// The text is read as a TOML table first (a syntax error names its line and column), then its
+    /// `kind`'s keys are read from the table directly rather than through serde's tagged enum, which
+    /// would drop the name of a key whose value has the wrong type: that error names the key and its
+    /// line.
     pub fn parse(text: &str) -> Result<Self> {
-        let target: Target = toml::from_str(text).map_err(|e| {
+        let bad = |why: &str| {
             Error::Input(format!(
-                "not a valid target: {}; a target file has kind = \"hairline\" | \"double-wedge\" | \"blue-noise\" | \"image\" | \"variance\" and that kind's keys (see targets/*.toml)",
-                e.message()
+                "not a valid target (a target file has kind = {} and that kind's keys; see targets/*.toml): {why}",
+                KINDS.map(|k| format!("\"{k}\"")).join(" | ")
             ))
-        })?;
+        };
+        let mut table: toml::Table =
+            toml::from_str(text).map_err(|e| bad(e.to_string().trim_end()))?;
+        let kind = match table.remove("kind") {
+            Some(toml::Value::String(kind)) => kind,
+            Some(other) => return Err(bad(&format!("kind = {other} is not a string"))),
+            None => return Err(bad("it has no kind key")),
+        };
+        let keys = toml::Value::Table(table);
+        let target = match kind.as_str() {
+            "hairline" => Hairline::deserialize(keys).map(Target::Hairline),
+            "double-wedge" => DoubleWedge::deserialize(keys).map(Target::DoubleWedge),
+            "blue-noise" => BlueNoise::deserialize(keys).map(Target::BlueNoise),
+            "image" => Image::deserialize(keys).map(Target::Image),
+            "variance" => Variance::deserialize(keys).map(Target::Variance),
+            other => return Err(bad(&format!("unknown kind \"{other}\""))),
+        }
+        .map_err(|e| bad(&located(&e.to_string(), text)))?;
         target.validate()?;
         Ok(match target {
             Target::Variance(v) => Target::Variance(v.resolved()),
@@ -390,7 +450,9 @@ impl Target {
         }
     }
 
-    fn dark_weight(&self) -> f64 {
+    /// The weight of the dark region's error in use: the file's `dark_weight`, or
+    /// [`DEFAULT_DARK_WEIGHT`] when left out (and for a variance target, which has no dark region).
+    pub fn dark_weight(&self) -> f64 {
         let w = match self {
             Target::Hairline(h) => h.dark_weight,
             Target::DoubleWedge(d) => d.dark_weight,
@@ -401,7 +463,9 @@ impl Target {
         w.unwrap_or(DEFAULT_DARK_WEIGHT)
     }
 
-    fn falloff(&self) -> f64 {
+    /// The exponent of the dark region's low-frequency emphasis in use: the file's `falloff`, or 0
+    /// when left out (and for a variance target).
+    pub fn falloff(&self) -> f64 {
         let a = match self {
             Target::Hairline(h) => h.falloff,
             Target::DoubleWedge(d) => d.falloff,
@@ -672,8 +736,20 @@ impl Target {
 
     fn beyond_reach(&self, n: usize, dark_cells: f64) -> Error {
         let reach = REACH * n as f64;
+        let fix = match self {
+            Target::Hairline(_) => "shorten length, or lower half_width, opening or inner_radius",
+            Target::DoubleWedge(_) => {
+                "narrow s0 .. s1, shorten radius, or lower margin or inner_radius"
+            }
+            Target::BlueNoise(_) => "lower radius",
+            Target::Image(_) => {
+                "lower extent, or lighten the image (cells at or below 0.05 count as dark; a spectrum \
+                 measured from a --latin table is dark along its k1 axis, and those cells count too)"
+            }
+            Target::Variance(_) => "lower extent",
+        };
         Error::Input(format!(
-            "the {} target darkens {} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}: reachable fraction {}. Shrink its dark region (radius, length or half-width) by that factor in area",
+            "the {} target darkens {} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}: reachable fraction {}. Shrink its dark region by that factor in area: {fix}",
             self.kind(),
             number(dark_cells.round()),
             crate::output::plot::short_number(reach / dark_cells)
@@ -777,6 +853,37 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("half_width"));
+    }
+
+    /// A key of the wrong type, an unknown key and a repeated key name the key and its line; a bad
+    /// or missing kind says so.
+    #[test]
+    fn parse_errors_name_the_key_and_its_line() {
+        let cases = [
+            (
+                "kind = \"blue-noise\"\n# radius in sqrt(N) cells\nradius = \"0.3\"\n",
+                "expected f64 (key radius, line 3)",
+            ),
+            (
+                "kind = \"double-wedge\"\ns0 = 0.3\ns1 = 0.7\nradius = 1.5\ncolour = 3\n",
+                "unknown field `colour`",
+            ),
+            (
+                "kind = \"double-wedge\"\ns0 = 0.3\ns1 = 0.7\nradius = 1.5\ncolour = 3\n",
+                "(key colour, line 5)",
+            ),
+            (
+                "kind = \"blue-noise\"\nradius = 0.3\nradius = 0.4\n",
+                "line 3",
+            ),
+            ("kind = 3\nradius = 0.3\n", "kind = 3 is not a string"),
+            ("kind = \"hairlin\"\n", "unknown kind \"hairlin\""),
+            ("radius = 0.3\n", "no kind key"),
+        ];
+        for (text, needle) in cases {
+            let m = Target::parse(text).unwrap_err().to_string();
+            assert!(m.contains(needle), "{text:?}: '{m}' lacks '{needle}'");
+        }
     }
 
     #[test]

@@ -148,7 +148,8 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
             (args.strat_weight != DEFAULT_STRATA.weight, "--strat-weight"),
         ]
         .into_iter()
-        .filter_map(|(is_given, flag)| is_given.then(|| flag.to_string()))
+        .filter(|(is_given, _)| *is_given)
+        .map(|(_, flag)| flag.to_string())
         .collect();
         if !given.is_empty() {
             return Err(Error::Usage(format!(

@@ -153,6 +153,29 @@ fn shear_formula_matches_the_camera() {
     }
 }
 
+/// The oracle's outermost probes lie inside the footprint: on its edge, rounding put them on the next
+/// pixel (`47 + (1 − 2^−52) = 48` exactly). Column 47 of the default scene sees only the middle box's
+/// in-focus front, whose right side ends exactly at x = 48 in front of the far box (depth 4.5, shear
+/// −0.47); it was classed a double wedge (shears −0.47 … 0) on rows 22–63. Column 48 sees the far
+/// box (the middle box's right side faces away from the camera at x = 0), and only it.
+#[test]
+fn oracle_probes_stay_inside_the_pixel() {
+    let sc = scene();
+    for py in 22..64 {
+        let o = oracle_pixel(&sc, 47, py);
+        assert_eq!(
+            o.class,
+            PixelClass::InFocus,
+            "(47, {py}): shears {:.3} … {:.3}",
+            o.s_min,
+            o.s_max
+        );
+    }
+    let o = oracle_pixel(&sc, 48, 32);
+    assert_eq!(o.class, PixelClass::Hairline, "{o:?}");
+    assert!((o.s_min + 0.474).abs() < 1e-3, "{o:?}");
+}
+
 /// Random sampling is unbiased on a single-depth and an occluder pixel, and its MSE falls as N^-1.
 #[test]
 fn random_sampling_is_unbiased_with_slope_minus_one() {

@@ -12,8 +12,16 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 /// Probes per axis of the `(x, y, u, v)` grid the shear range is taken over (`PROBES^4` rays a pixel,
-/// at `i / (PROBES − 1)`, so the footprint's and the lens's edges are included).
+/// from [`PROBE_INSET`] to `1 − PROBE_INSET` in equal steps, so the footprint's and the lens's edges
+/// are included).
 pub const PROBES: usize = 6;
+
+/// How far inside the footprint and the lens the outermost probes lie, in units of a pixel and of the
+/// lens side. A probe on the edge itself belongs to two pixels: rounded, `47 + (1 − 2^−52)` is
+/// exactly 48, and a scene edge that lies on that pixel boundary (the default scene's middle box
+/// ends at x = 48) was seen by column 47, which the oracle then called a double wedge although none
+/// of its rays reaches the box behind.
+pub const PROBE_INSET: f64 = 1e-6;
 
 /// A pixel whose shears all have `|s| ≤ IN_FOCUS` (pixel per lens width) is in focus: the defocus blur
 /// is under a twentieth of a pixel.
@@ -86,7 +94,7 @@ pub fn oracle_pixel(scene: &Scene, px: usize, py: usize) -> PixelOracle {
     };
     let mut s_min = s;
     let mut s_max = s;
-    let at = |i: usize| (i as f64 / (PROBES - 1) as f64).min(1.0 - f64::EPSILON);
+    let at = |i: usize| PROBE_INSET + (1.0 - 2.0 * PROBE_INSET) * i as f64 / (PROBES - 1) as f64;
     for i in 0..PROBES.pow(4) {
         let p = [
             at(i % PROBES),

@@ -10,7 +10,10 @@ pub struct SlopeFit {
     /// Standard error of `slope`, from the points' standard errors, inflated by `sqrt(χ²/dof)` when the
     /// points scatter more than their errors allow (a curved, pre-asymptotic run).
     pub stderr: f64,
-    /// 95% confidence interval of the slope: `slope ± 1.96 stderr`.
+    /// 95% confidence interval of the slope: `slope ± 1.96 stderr` from the points' standard errors,
+    /// or `slope ± t stderr` with Student's `t` of the fit's `dof = points − 2` degrees of freedom
+    /// ([`crate::stats::student_t_95`]: 4.30 for 4 points) when `stderr` was inflated, since the scale
+    /// `sqrt(χ²/dof)` is then estimated from those few residuals.
     pub ci95: (f64, f64),
     /// `χ² / dof` of the fit (NaN-free: 0 with two points).
     pub chi2_per_dof: f64,
@@ -110,10 +113,15 @@ pub fn fit_power_law(n: &[f64], y: &[f64], se: &[f64], floor: &[f64]) -> Result<
     } else {
         (0.0, 0.0)
     };
+    let quantile = if chi2_per_dof > 1.0 {
+        crate::stats::student_t_95(x.len() - 2)
+    } else {
+        1.96
+    };
     Ok(SlopeFit {
         slope,
         stderr,
-        ci95: (slope - 1.96 * stderr, slope + 1.96 * stderr),
+        ci95: (slope - quantile * stderr, slope + quantile * stderr),
         chi2_per_dof,
         errors_defined,
     })
@@ -168,6 +176,35 @@ mod tests {
         assert!(lo < f.slope && f.slope < hi);
         assert!(f.chi2(3).is_some_and(f64::is_finite));
         assert_eq!(f.chi2(2), None);
+    }
+
+    /// When the points scatter more than their errors allow, the scale `sqrt(χ²/dof)` comes from
+    /// `points − 2` residuals, and the 95 % interval takes Student's t of that many degrees of freedom
+    /// (4.30 for four points, where 1.96 covered about 81 %); points within their errors keep 1.96.
+    #[test]
+    fn a_scattered_fit_widens_its_interval_by_students_t() {
+        let n = [16.0, 64.0, 256.0, 1024.0];
+        let se = [1e-3; 4];
+        // ln y off a line by ±0.05 (50 standard errors): χ²/dof ≫ 1.
+        let y: Vec<f64> = n
+            .iter()
+            .zip([0.05, -0.05, -0.05, 0.05])
+            .map(|(n, d): (&f64, f64)| (n.powf(-1.5).ln() + d).exp())
+            .collect();
+        let se_abs: Vec<f64> = y.iter().zip(se).map(|(y, s)| y * s).collect();
+        let f = fit_power_law(&n, &y, &se_abs, &[0.0; 4]).unwrap();
+        assert!(f.chi2_per_dof > 100.0, "{f:?}");
+        let half = f.ci95.1 - f.slope;
+        assert!((half / f.stderr - 4.302_652_7).abs() < 1e-6, "{f:?}");
+        // On the line, within the errors: the normal quantile.
+        let y: Vec<f64> = n.iter().map(|n| n.powf(-1.5)).collect();
+        let se_abs: Vec<f64> = y.iter().map(|y| y * 1e-3).collect();
+        let f = fit_power_law(&n, &y, &se_abs, &[0.0; 4]).unwrap();
+        assert!(f.chi2_per_dof <= 1.0, "{f:?}");
+        assert!(
+            ((f.ci95.1 - f.slope) / f.stderr - 1.96).abs() < 1e-12,
+            "{f:?}"
+        );
     }
 
     #[test]

@@ -52,8 +52,10 @@ pub struct RadialBin {
     pub r_normalized: f64,
     /// Mean of `E[P]` over the annulus.
     pub mean: f64,
-    /// Standard error of `mean` (per-bin standard errors combined as independent); `None` from a
-    /// single realization, whose spread is unknown.
+    /// Standard error of `mean`; `None` from a single realization, whose spread is unknown. Each bin
+    /// `k` of the annulus has its mirror `−k` in it with the same `P` (real points), so the bins are
+    /// combined in mirror pairs, the pairs taken as independent: `sqrt(2 Σ se²) / count` (combining
+    /// the bins themselves as independent understated it by `1/sqrt(2)`).
     pub stderr: Option<f64>,
     /// `10 log10(var / mean²)` of `E[P]` within the annulus, in dB; `None` where the annulus is dark
     /// or flat within the error of the method that computed `P` ([`precision`]), where the ratio would
@@ -137,7 +139,8 @@ pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize, method: Method) -> 
                 r,
                 r_normalized: r as f64 / (spec.n as f64).sqrt(),
                 mean,
-                stderr: (spec.realizations > 1).then(|| var_sum[r].sqrt() / c),
+                // Every annulus here lies inside the grid, so it holds each bin's mirror.
+                stderr: (spec.realizations > 1).then(|| (2.0 * var_sum[r]).sqrt() / c),
                 anisotropy_db,
                 cones: (0..cones)
                     .map(|k| {

@@ -60,6 +60,9 @@ pub struct SubjectInfo {
     /// The integral the errors are measured against (its exact value, or a pixel's high-count
     /// reference), in the integrand's units (radiance for a pixel).
     pub integral: f64,
+    /// The standard error of `integral`: 0 for an exact value; for a pixel's reference, whose error
+    /// adds its square (on average) to every MSE measured against it.
+    pub integral_stderr: f64,
 }
 
 /// How a sampler of the study is made for a subject.
@@ -322,6 +325,7 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
                 shear_range: s.shear_range,
                 oracle_shear: s.oracle_shear,
                 integral: s.integrand.reference().value,
+                integral_stderr: s.integrand.reference().stderr,
             })
             .collect(),
         studies,

@@ -450,13 +450,15 @@ fn write_markdown(
              axes. **Oracle at the pixel centre** is what `anisospec oracle` gives for the pixel (sx, sy): the shear \
              at the depth seen through the pixel centre and the lens centre, one depth of the fan for a double \
              wedge, so it differs from the samplers' shear there (— for an analytic integrand, which has no \
-             oracle).\n"
+             oracle). A pixel's **integral** is its reference ({} rays) ± its standard error, whose square \
+             (**reference floor**) adds to every MSE of the pixel on average; an analytic integral is exact.\n",
+            c.pixel_reference_count
         )?;
         writeln!(
             w,
-            "| integrand | class | integral | shear range | samplers' shear (sx, sy) | oracle at the pixel centre (sx, sy) |"
+            "| integrand | class | integral | reference floor | shear range | samplers' shear (sx, sy) | oracle at the pixel centre (sx, sy) |"
         )?;
-        writeln!(w, "|---|---|---|---|---|---|")?;
+        writeln!(w, "|---|---|---|---|---|---|---|")?;
         for SubjectInfo {
             label,
             class,
@@ -464,8 +466,17 @@ fn write_markdown(
             shear_range: range,
             oracle_shear,
             integral,
+            integral_stderr,
         } in &outcome.subjects
         {
+            let (integral, floor) = if *integral_stderr > 0.0 {
+                (
+                    format!("{integral:.4e} ± {integral_stderr:.1e}"),
+                    format!("{:.1e}", integral_stderr * integral_stderr),
+                )
+            } else {
+                (format!("{integral:.4e}"), "—".to_string())
+            };
             let midpoint = if class == "double-wedge" {
                 " (range midpoint)"
             } else {
@@ -476,7 +487,7 @@ fn write_markdown(
             });
             writeln!(
                 w,
-                "| {label} | {class} | {integral:.4e} | [{}, {}] | ({}, {}){midpoint} | {oracle} |",
+                "| {label} | {class} | {integral} | {floor} | [{}, {}] | ({}, {}){midpoint} | {oracle} |",
                 shear_text(range.0),
                 shear_text(range.1),
                 shear_text(shear.0),

@@ -46,6 +46,12 @@ pub const MAX_SHEAR: f64 = 1e6;
 
 /// Shears one pair `(a, b)` of pattern coordinates in `[0,1)^2` into `(x, u)` such that `x + s u` carries
 /// the stratification of `a`.
+///
+/// Transported, a negative shear is the transport of `|s|` reflected in `u`: `u = 1 − u⁺` with `u⁺`
+/// the `u` of `|s|`, which makes `x + s u = x + |s| u⁺ − |s|`, stratified the same way. So `b` maps to
+/// a `u` that decreases with it for `s < 0` and increases for `s > 0`, and as `s` crosses 0 the map
+/// jumps from `u = 1 − b` to `u = b` (each side exactly uniform). For a negative shear the pattern's
+/// `xu` spectrum `P(k1, k2)` (`k2` along `u`) thus enters the transport as `P(k1, −k2)`.
 pub fn shear_pair(a: f64, b: f64, s: f64, mode: ShearMode) -> (f64, f64) {
     if s.abs() < NO_SHEAR {
         return (a, b);

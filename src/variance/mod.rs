@@ -500,10 +500,15 @@ pub fn predict_with_progress(
             .res_per_n
             .map_or(cfg.res, |m| cfg.res.max((m * n).div_ceil(2) * 2));
         if spec.as_ref().is_none_or(|s| s.0 != res) {
+            // The bar counts realizations; say what runs before them (a fan's coefficients on a
+            // 1024 x 1024 grid take minutes).
+            let label = bar.message();
+            bar.set_message(format!("f̂ on {res} x {res}"));
             let computed = match &frame {
                 Some(fr) => pulled_back_spectrum(f, fr, res, cfg.cones)?,
                 None => integrand_spectrum(f, res, cfg.cones)?,
             };
+            bar.set_message(label);
             spec = Some((res, computed));
         }
         let spec = &spec.as_ref().expect("computed above").1;

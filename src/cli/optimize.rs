@@ -2,7 +2,6 @@
 //! header) with a JSON sidecar and a CSV log.
 
 use crate::error::{number, Error, Result};
-use crate::optimize::solver::TIME_LIMIT_STOP;
 use crate::optimize::{
     self, lattice_design, loss::Repulsion, metrics, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
     DEFAULT_LIMITS, DEFAULT_REPULSION, DEFAULT_STRATA,
@@ -298,10 +297,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         }
     };
     let seconds = t0.elapsed().as_secs_f64();
-    let timed_out = reports
-        .iter()
-        .filter(|r| r.stop.starts_with(TIME_LIMIT_STOP))
-        .count();
+    let timed_out = optimize::time_limited(&reports);
     if timed_out > 0 {
         eprintln!(
             "warning: {timed_out} of {} sets stopped at --max-seconds ({} s) before the solver's other limits; the table depends on this machine's speed, and the command in its header may make another; raise --max-seconds",

@@ -12,7 +12,6 @@
 
 use super::config::CompareConfig;
 use crate::error::{Error, Result};
-use crate::optimize::solver::TIME_LIMIT_STOP;
 use crate::optimize::{
     lattice_design, optimize_sets, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT, DEFAULT_REPULSION,
 };
@@ -234,10 +233,7 @@ impl TableCache {
     fn optimized(&self, source: &Path, target: &Target, n: usize) -> Result<(PointSets, usize)> {
         let setup = table_setup(target.clone(), n, self.seconds);
         let (points, reports) = optimize_sets(&setup, self.sets, self.seed, &|_| {})?;
-        let timed_out = reports
-            .iter()
-            .filter(|r| r.stop.starts_with(TIME_LIMIT_STOP))
-            .count();
+        let timed_out = crate::optimize::time_limited(&reports);
         if timed_out > 0 {
             eprintln!(
                 "warning: {timed_out} of {} sets of the {} table at N = {n} stopped at the time limit \

@@ -203,6 +203,15 @@ impl Setup {
     }
 }
 
+/// How many of `reports` stopped at their wall-time limit (see [`solver::TIME_LIMIT_STOP`]): those
+/// sets depend on the machine's speed.
+pub fn time_limited(reports: &[SetReport]) -> usize {
+    reports
+        .iter()
+        .filter(|r| r.stop.starts_with(solver::TIME_LIMIT_STOP))
+        .count()
+}
+
 /// The outcome for one set.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SetReport {

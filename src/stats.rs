@@ -24,6 +24,9 @@ pub fn check_realizations(name: &str, count: usize) -> Result<()> {
     Ok(())
 }
 
+/// The two-sided 95 % quantile of the standard normal distribution.
+pub const NORMAL_95: f64 = 1.959_963_984_540_054;
+
 /// The two-sided 95 % quantile of Student's t with `dof ≥ 1` degrees of freedom: the `t` with
 /// `P(|T| ≤ t) = 0.95`, from 12.706 at one degree of freedom down to 1.960 as `dof` grows. A scale
 /// estimated from `dof` residuals (a fit's `sqrt(χ²/dof)`) needs it instead of the normal 1.96 for a
@@ -36,7 +39,6 @@ pub fn check_realizations(name: &str, count: usize) -> Result<()> {
 /// Panics if `dof == 0`.
 pub fn student_t_95(dof: usize) -> f64 {
     assert!(dof > 0, "Student's t needs at least one degree of freedom");
-    const NORMAL_95: f64 = 1.959_963_984_540_054;
     if dof >= 1000 {
         return NORMAL_95;
     }

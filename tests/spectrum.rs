@@ -57,6 +57,55 @@ fn radial_standard_error_is_the_spread_over_runs() {
     );
 }
 
+/// The library's expected spectrum (chunked sums of P and P², on the half plane for the NUFFT) is the
+/// mean of `power` over the sets: over R = 37 sets (ten chunks of four, batches of several chunks) on
+/// K = 2, 6 and 32, each bin within the reassociation error of summing 37 values, 37 · 2^-52 of the
+/// sum, and, by NUFFT, P(k) = P(−k) bit for bit off the k1 axis (a row k2 < 0 is the mirror copy of
+/// row −k2; on k2 = 0 both signs of k1 are computed).
+#[test]
+fn expected_spectrum_is_the_mean_of_power() {
+    use anisospec::spectrum::expected::expected_spectrum;
+    use anisospec::spectrum::power;
+    let random = build("random", 2).unwrap();
+    let sets: Vec<Vec<[f64; 2]>> = (0..37u64)
+        .map(|r| {
+            let set = random.generate(50, &mut anisospec::rng::stream(11, r));
+            set.chunks_exact(2).map(|p| [p[0], p[1]]).collect()
+        })
+        .collect();
+    for method in [Method::Exact, Method::Nufft { eps: 1e-6 }] {
+        for res in [2, 6, 32] {
+            let spec =
+                expected_spectrum(sets.len(), res, method, "test", |r| sets[r].clone()).unwrap();
+            let mut sum = vec![0.0; res * res];
+            for s in &sets {
+                for (a, p) in sum.iter_mut().zip(power(s, res, method)) {
+                    *a += p;
+                }
+            }
+            let r = sets.len() as f64;
+            for (i, (m, s)) in spec.mean.iter().zip(&sum).enumerate() {
+                let tol = r * f64::EPSILON * s / r;
+                assert!(
+                    (m - s / r).abs() <= tol,
+                    "{method:?} K={res} bin {i}: {m} against {}",
+                    s / r
+                );
+            }
+            if matches!(method, Method::Nufft { .. }) {
+                let h = (res / 2) as i64;
+                for i in (1..res as i64).filter(|&i| i != h) {
+                    for j in 1..res as i64 {
+                        let mirror = ((2 * h - i) * res as i64 + (2 * h - j)) as usize;
+                        let here = (i * res as i64 + j) as usize;
+                        assert_eq!(spec.mean[here].to_bits(), spec.mean[mirror].to_bits());
+                    }
+                }
+            }
+        }
+    }
+}
+
 fn sinc(x: f64) -> f64 {
     if x == 0.0 {
         1.0

@@ -81,7 +81,8 @@ pub struct OptimizeArgs {
     /// NUFFT tolerance for the loss and its gradient, from 1e-12 to 1e-1.
     #[arg(long, default_value = "1e-8", allow_negative_numbers = true)]
     pub eps: f64,
-    /// Largest number of solver iterations per set (0 writes the starting sets unmoved).
+    /// Largest number of solver iterations per set (0 takes no solver step: the starting sets as
+    /// --latin centres them, coincident points moved apart).
     #[arg(long, default_value_t = DEFAULT_LIMITS.max_iters, value_parser = parse_iterations, allow_negative_numbers = true)]
     pub max_iters: u64,
     /// Largest wall time per set, in seconds, at most 1e9 (results depend on machine speed only if
@@ -323,7 +324,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         "parameters": {
             "n": args.n, "dims": args.dims, "sets": args.sets, "seed": args.seed,
             "method": if args.exact { "exact".to_string() } else { format!("nufft eps={}", number(args.eps)) },
-            "strata": setup.strata, "repulsion": { "radius": setup.repulsion.radius, "weight": setup.repulsion.weight },
+            "strata": (args.dims == 4).then_some(setup.strata), "repulsion": { "radius": setup.repulsion.radius, "weight": setup.repulsion.weight },
             "limits": setup.limits, "init": setup.init, "latin": setup.latin,
             "annular_weight": setup.annular_weight,
             // The shape's weights in use, defaults filled in (the target above shows null for a key
@@ -349,7 +350,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     write_group(&refs, |staged| {
         write_points(&staged(&outputs[0]), &points)?;
         write_points(&staged(&outputs[1]), &points)?;
-        write_header(&staged(&outputs[2]), &points, args, timed_out)?;
+        write_header(&staged(&outputs[2]), &points, args, &target, timed_out)?;
         write_atomic(&staged(&outputs[3]), |w| writeln!(w, "{text}"))?;
         write_atomic(&staged(&outputs[4]), |w| {
             writeln!(w, "set,iter,seconds,loss,solver")?;
@@ -469,13 +470,19 @@ fn command_line(args: &OptimizeArgs) -> String {
         parts.push("--latin".into());
     }
     parts.push(format!(
-        "--annular-weight {} --repulsion-radius {} --repulsion-weight {} --strat-radius {} --strat-weight {}",
+        "--annular-weight {} --repulsion-radius {} --repulsion-weight {}",
         number(args.annular_weight),
         number(args.repulsion_radius),
         number(args.repulsion_weight),
-        number(args.strat_radius),
-        number(args.strat_weight)
     ));
+    // A 2D table has no strata term (and refuses its flags).
+    if args.dims == 4 {
+        parts.push(format!(
+            "--strat-radius {} --strat-weight {}",
+            number(args.strat_radius),
+            number(args.strat_weight)
+        ));
+    }
     parts.push(if args.exact {
         "--exact".to_string()
     } else {
@@ -494,7 +501,8 @@ fn command_line(args: &OptimizeArgs) -> String {
 /// A C header with the same numbers as the npy table: `static const double NAME[sets][n][dims]` and
 /// the macros `NAME_SETS`, `NAME_N`, `NAME_DIMS` (upper case), with `NAME` from [`c_name`] of `-o`.
 /// Its first line, a comment, is the [`command_line`] of the run; a second says when `timed_out`
-/// sets stopped at `--max-seconds`; a third what the numbers are and how a renderer uses them. The
+/// sets stopped at `--max-seconds`; a third what the numbers are and how a renderer uses them (with
+/// the shear a 4D `--latin` table or `target`'s own shear asks for). The
 /// include guard `NAME_H_HASH` carries a hash of the numbers: two different tables whose file names
 /// give the same `NAME` (`fan-a.npy`, `fan_a.npy`) then fail to compile together (a redefinition)
 /// instead of one silently hiding the other, and the same table included twice is read once.
@@ -502,11 +510,17 @@ fn write_header(
     path: &Path,
     points: &PointSets,
     args: &OptimizeArgs,
+    target: &Target,
     timed_out: usize,
 ) -> Result<()> {
     let name = c_name(&args.output)?;
     let upper = name.to_ascii_uppercase();
-    let bytes: Vec<u8> = points.data().iter().flat_map(|c| c.to_le_bytes()).collect();
+    // The shape too: the same numbers as [2][8][2] and [1][16][2] are different tables.
+    let bytes: Vec<u8> = [points.sets(), points.n(), points.dims()]
+        .iter()
+        .flat_map(|&d| (d as u64).to_le_bytes())
+        .chain(points.data().iter().flat_map(|c| c.to_le_bytes()))
+        .collect();
     let guard = format!("{upper}_H_{:016X}", crate::output::stable_hash(&bytes));
     let coordinates = if points.dims() == 4 {
         "(x, y, u, v), x and y on the pixel, u and v on the lens, the target met on xu and yv"
@@ -523,11 +537,24 @@ fn write_header(
                 points.sets()
             )?;
         }
+        // Where the table is sheared at use: by its variance target's own shear, or, a 4D --latin
+        // table, by each pixel's oracle shear.
+        let shear = match target {
+            Target::Variance(v) if v.shear != 0.0 => format!(
+                " Its target saw the integrands through the seam-free shear {}: move each shifted set \
+                 through it (the transported shear of anisospec, src/points/shear.rs).",
+                number(v.shear)
+            ),
+            _ if points.dims() == 4 && args.latin => " Made for the depth oracle's shear: move each \
+                 shifted set through the seam-free shear by the pixel's shear (the transported shear of \
+                 anisospec, src/points/shear.rs)."
+                .to_string(),
+            _ => String::new(),
+        };
         writeln!(
             w,
             "/* {name}[set][point][dim]: {} of {} points in {}D, each coordinate in [0, 1): {coordinates}. \
-             Each estimate takes one set and adds a random toroidal shift to it (mod 1); a table made for \
-             the depth oracle's shear (--latin) is then moved through the seam-free shear of DESIGN section 5. */",
+             Each estimate takes one set and adds a random toroidal shift to it (mod 1).{shear} */",
             crate::cli::counted(points.sets(), "set"),
             points.n(),
             points.dims()

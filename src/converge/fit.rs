@@ -10,10 +10,11 @@ pub struct SlopeFit {
     /// Standard error of `slope`, from the points' standard errors, inflated by `sqrt(χ²/dof)` when the
     /// points scatter more than their errors allow (a curved, pre-asymptotic run).
     pub stderr: f64,
-    /// 95% confidence interval of the slope: `slope ± 1.96 stderr` from the points' standard errors,
-    /// or `slope ± t stderr` with Student's `t` of the fit's `dof = points − 2` degrees of freedom
-    /// ([`crate::stats::student_t_95`]: 4.30 for 4 points) when `stderr` was inflated, since the scale
-    /// `sqrt(χ²/dof)` is then estimated from those few residuals.
+    /// 95% confidence interval of the slope: `slope ± 1.96 stderr` from the points' standard errors
+    /// when `χ²/dof ≤ 1`, or, when `χ²/dof > 1` inflated `stderr`, `slope ± t stderr` with Student's
+    /// `t` of the fit's `dof = points − 2` degrees of freedom ([`crate::stats::student_t_95`]: 4.30
+    /// for 4 points), since the scale `sqrt(χ²/dof)` is then estimated from those few residuals. The
+    /// switch is a jump: points that scatter just beyond their errors get the wider interval.
     pub ci95: (f64, f64),
     /// `χ² / dof` of the fit (NaN-free: 0 with two points).
     pub chi2_per_dof: f64,
@@ -116,7 +117,7 @@ pub fn fit_power_law(n: &[f64], y: &[f64], se: &[f64], floor: &[f64]) -> Result<
     let quantile = if chi2_per_dof > 1.0 {
         crate::stats::student_t_95(x.len() - 2)
     } else {
-        1.96
+        crate::stats::NORMAL_95
     };
     Ok(SlopeFit {
         slope,
@@ -202,7 +203,7 @@ mod tests {
         let f = fit_power_law(&n, &y, &se_abs, &[0.0; 4]).unwrap();
         assert!(f.chi2_per_dof <= 1.0, "{f:?}");
         assert!(
-            ((f.ci95.1 - f.slope) / f.stderr - 1.96).abs() < 1e-12,
+            ((f.ci95.1 - f.slope) / f.stderr - crate::stats::NORMAL_95).abs() < 1e-12,
             "{f:?}"
         );
     }

@@ -194,9 +194,11 @@ impl Setup {
             .validate()
             .and_then(|()| strata.grid(self.n))
             .map_err(|e| match e {
-                Error::Usage(m) | Error::Input(m) => Error::Input(format!(
-                    "the 4D strata term (a blue-noise disc of radius --strat-radius {} on xy and uv): {m}; or drop the term with --strat-weight 0",
-                    crate::error::number(self.strata.radius)
+                // A flag's problem, not a target file's: a usage error, its advice in flags.
+                Error::Usage(m) | Error::Input(m) => Error::Usage(format!(
+                    "the 4D strata term (a blue-noise disc of radius --strat-radius {} on xy and uv): {}; or drop the term with --strat-weight 0",
+                    crate::error::number(self.strata.radius),
+                    m.replace("lower radius", "lower --strat-radius")
                 )),
                 other => other,
             })

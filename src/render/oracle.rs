@@ -12,8 +12,8 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 /// Probes per axis of the `(x, y, u, v)` grid the shear range is taken over (`PROBES^4` rays a pixel,
-/// from [`PROBE_INSET`] to `1 − PROBE_INSET` in equal steps, so the footprint's and the lens's edges
-/// are included).
+/// from [`PROBE_INSET`] to `1 − PROBE_INSET` in equal steps: the footprint's and the lens's edges,
+/// 1e-6 inside them, and four steps between).
 pub const PROBES: usize = 6;
 
 /// How far inside the footprint and the lens the outermost probes lie, in units of a pixel and of the

@@ -156,7 +156,8 @@ pub struct PowerSums {
 }
 
 impl PowerSums {
-    /// Zero sums on the `res × res` grid. Panics as [`power`] does on an invalid `res` or `eps`.
+    /// Zero sums for spectra on the `res × res` grid, in the layout of `method` (the grid, or its
+    /// half plane). An invalid `res` or `eps` panics later, in [`PowerSums::add`], as [`power`] does.
     pub fn new(res: usize, method: Method) -> Self {
         let len = match method {
             Method::Exact => res * res,

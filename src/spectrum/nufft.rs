@@ -24,8 +24,8 @@
 //! realfft real-to-complex call per row and the same transpose). Column stage: one batched complex FFT of the `K/2 + 1` lines along
 //! x; `k2 < 0` comes from Hermitian symmetry. Each output row is then a contiguous run of one
 //! transformed line. The power spectrum needs no complex deconvolution, `P = |B|² corr(k1)²
-//! corr(k2)² / N` with `B` the transformed fine grid, and fills row `−k2` from row `k2`
-//! (`P(k) = P(−k)`) in the same pass.
+//! corr(k2)² / N` with `B` the transformed fine grid, computed on the half plane `k2 ≥ 0` only
+//! (`P(k) = P(−k)`): expected spectra sum it there, and a single spectrum mirrors it onto the grid.
 //! The kernel is evaluated per point as `2w` values of fitted polynomials (Horner with fused
 //! multiply-adds, degree chosen at planning time until the measured fit error is below the tolerance
 //! scaled by the deconvolution's band-edge gain), then `w²` fused multiply-adds into a padded grid
@@ -190,7 +190,7 @@ struct Grid {
     /// `1 / ψ̂(k)` for `k = 0 ..= res/2`: the deconvolution factors (even in `k`).
     corr: Vec<f64>,
     /// `corr[|k1|]²` at `k1 = j − K/2` for `j = 0 ..= K`: the squared factors of one run of the power
-    /// spectrum, in row order (see `power_rows`).
+    /// spectrum, in run order (see `power_runs`).
     corr_sq_run: Vec<f64>,
     /// Piecewise-polynomial kernel (see `fit_kernel`); empty when the kernel is evaluated directly.
     coef: Vec<f64>,
@@ -420,15 +420,17 @@ impl Nufft2d {
     }
 
     /// [`Nufft2d::power`] on a given grid.
+    /// The runs of the half plane `k2 ≥ 0`, expanded onto the grid by `P(k) = P(−k)`
+    /// ([`expand_half_plane`]).
     fn power_on(&self, grid: &Grid, points: &[[f64; 2]]) -> Vec<f64> {
         let k = self.res;
-        let mut out = vec![0.0; k * k];
+        let mut half = vec![0.0; half_plane_len(k)];
         if !points.is_empty() {
-            grid.power_rows(points, 1.0 / points.len() as f64, |i, p| {
-                out[i * k..(i + 1) * k].copy_from_slice(p)
+            grid.power_runs(points, 1.0 / points.len() as f64, |a, run| {
+                half[a * (k + 1)..(a + 1) * (k + 1)].copy_from_slice(run)
             });
         }
-        out
+        expand_half_plane(&half, k)
     }
 
     /// Type 2 (the adjoint of type 1): `g_j = Σ_k c(k) exp(+2πi k·x_j)` for coefficients `c` on the
@@ -973,26 +975,6 @@ impl Grid {
                 }
             },
         );
-    }
-
-    /// [`Grid::power_runs`] as rows of the full grid: `emit(i, P)` gets each output row `i`
-    /// (`k2 = i − K/2`, all `k1`; layout of [`crate::spectrum`]) exactly once, in no particular
-    /// order. Run `a` gives row `K/2 + a` (its first `K` values) and, reversed while in cache, row
-    /// `K/2 − a`: by `P(k) = P(−k)` for real weights, entry `j` of that row is `run[K − j]`.
-    fn power_rows(&self, points: &[[f64; 2]], inv_n: f64, mut emit: impl FnMut(usize, &[f64])) {
-        let k = self.res;
-        let half = k / 2;
-        let mut rev = vec![0.0; k];
-        self.power_runs(points, inv_n, |a, run| {
-            // Row +K/2 is not in the grid; row 0 is its own mirror.
-            if a < half {
-                emit(half + a, &run[..k]);
-            }
-            if a > 0 {
-                copy_reversed(&mut rev, &run[1..]);
-                emit(half - a, &rev);
-            }
-        });
     }
 
     /// Spreads the points and runs the row stage, then hands `body` the `K/2 + 1` lines (line `k2`

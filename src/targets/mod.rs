@@ -57,9 +57,16 @@ fn located(error: &str, text: &str) -> String {
     let first = key.split('.').next().unwrap_or(key);
     let line = text.lines().position(|l| {
         let l = l.trim_start();
-        l.strip_prefix(first)
-            .is_some_and(|rest| rest.trim_start().starts_with('='))
-            || l.trim_start_matches('[').trim_start().starts_with(first) && l.starts_with('[')
+        let key_line = l
+            .strip_prefix(first)
+            .is_some_and(|rest| rest.trim_start().starts_with('='));
+        // `[first]`, `[[first]]` or `[first.sub]`, not `[firsts]`.
+        let header = l.starts_with('[')
+            && l.trim_start_matches('[')
+                .trim_start()
+                .strip_prefix(first)
+                .is_some_and(|rest| rest.starts_with([']', '.', ' ', '\t']));
+        key_line || header
     });
     match line {
         Some(i) => format!("{what} (key {key}, line {})", i + 1),
@@ -746,7 +753,7 @@ impl Target {
                 "lower extent, or lighten the image (cells at or below 0.05 count as dark; a spectrum \
                  measured from a --latin table is dark along its k1 axis, and those cells count too)"
             }
-            Target::Variance(_) => "lower extent",
+            Target::Variance(_) => unreachable!("a variance target has no dark region"),
         };
         Error::Input(format!(
             "the {} target darkens {} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}: reachable fraction {}. Shrink its dark region by that factor in area: {fix}",
@@ -879,6 +886,10 @@ mod tests {
             ("kind = 3\nradius = 0.3\n", "kind = 3 is not a string"),
             ("kind = \"hairlin\"\n", "unknown kind \"hairlin\""),
             ("radius = 0.3\n", "no kind key"),
+            (
+                "kind = \"blue-noise\"\nradius = 0.3\n[falloffs]\na = 1\n[falloff]\nb = 2\n",
+                "(key falloff, line 5)",
+            ),
         ];
         for (text, needle) in cases {
             let m = Target::parse(text).unwrap_err().to_string();

@@ -744,15 +744,18 @@ impl Target {
     fn beyond_reach(&self, n: usize, dark_cells: f64) -> Error {
         let reach = REACH * n as f64;
         let fix = match self {
-            Target::Hairline(_) => "shorten length, or lower half_width, opening or inner_radius",
+            Target::Hairline(_) => {
+                "shorten length, or lower half_width, opening or inner_radius".to_string()
+            }
             Target::DoubleWedge(_) => {
-                "narrow s0 .. s1, shorten radius, or lower margin or inner_radius"
+                "narrow s0 .. s1, shorten radius, or lower margin or inner_radius".to_string()
             }
-            Target::BlueNoise(_) => "lower radius",
-            Target::Image(_) => {
-                "lower extent, or lighten the image (cells at or below 0.05 count as dark; a spectrum \
-                 measured from a --latin table is dark along its k1 axis, and those cells count too)"
-            }
+            Target::BlueNoise(_) => "lower radius".to_string(),
+            Target::Image(_) => format!(
+                "lower extent, or lighten the image (cells at or below {DARK_LEVEL} count as dark; a \
+                 spectrum measured from a --latin table is dark along its k1 axis, and those cells \
+                 count too)"
+            ),
             Target::Variance(_) => unreachable!("a variance target has no dark region"),
         };
         Error::Input(format!(

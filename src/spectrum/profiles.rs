@@ -262,8 +262,19 @@ mod tests {
         for b in prof {
             assert_eq!(b.mean, 1.0);
             assert!(b.cones.iter().flatten().all(|&c| c == 1.0));
-            // Independent bins of standard error 0.5: the annulus mean's is 0.5 / sqrt(count) > 0.
-            assert!(b.stderr.is_some_and(|se| se > 0.0 && se < 0.5), "{b:?}");
+            // Bins of standard error 0.5 in mirror pairs: the annulus mean's is sqrt(2 c 0.25) / c
+            // over its c bins, to rounding.
+            let c = (0..res * res)
+                .filter(|&i| {
+                    let (k1, k2) = frequency(i, res);
+                    annulus(k1, k2) == b.r
+                })
+                .count() as f64;
+            let want = (2.0 * c * 0.25).sqrt() / c;
+            assert!(
+                b.stderr.is_some_and(|se| (se - want).abs() < 1e-15),
+                "{b:?}, want {want}"
+            );
         }
         // A flat annulus has no anisotropy to report (its variance is 0), rather than a floor in dB.
         assert!(radial_profile(&spec, 0, Method::Exact)

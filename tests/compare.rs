@@ -377,6 +377,7 @@ fn widened_hairline_has_the_lowest_worst_case_over_the_sweep() {
         integrand: "sheared:s=0.5,c=0.7".into(),
         shear: subject.shear.0 * (1.0 + spike_error),
         placements: Some(0),
+        shear_error: None,
         extent: 1.0,
         weight: None,
         design: None,

@@ -935,9 +935,13 @@ fn write_tables(
                 }
                 Ok(Target::Hairline(_)) => "hairline band, unsheared".to_string(),
                 Ok(Target::Variance(v)) => format!(
-                    "variance of {} through shear {}",
+                    "variance of {} through shear {}{}",
                     v.integrand,
-                    shear_text(v.shear)
+                    shear_text(v.shear),
+                    match v.shear_error() {
+                        0.0 => String::new(),
+                        e => format!(" off by up to ±{}%", (e * 1000.0).round() / 10.0),
+                    }
                 ),
                 Ok(t) => t.kind().to_string(),
                 Err(e) => format!("({e})"),

@@ -18,6 +18,7 @@ use crate::error::{Error, Result};
 use crate::integrands::sampled::sampled_power;
 use crate::integrands::{spec, Integrand};
 use crate::points::shear::{shear_pair, ShearMode, MAX_SHEAR};
+use rand::Rng as _;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -71,6 +72,13 @@ pub struct Variance {
     /// averaged into `|ĝ|²` (default [`DEFAULT_PLACEMENTS`]); 0 takes the integrand as written.
     #[serde(default)]
     pub placements: Option<usize>,
+    /// The relative error of `shear` the design should tolerate (the oracle's error): each placement
+    /// is also moved by `shear · (1 + e)` instead of `shear`, with `e` uniform in
+    /// `[−shear_error, shear_error]` drawn from the placement's stream, so `|ĝ|²` is the mean over
+    /// the errors as well (default 0: every placement moved by `shear`). At least 0 and below 1; needs
+    /// a nonzero `shear` and at least one placement.
+    #[serde(default)]
+    pub shear_error: Option<f64>,
     /// Fit radius in normalized frequency `|k| / sqrt(N)` (at least 4 frequency cells).
     pub extent: f64,
     /// Loss weight against the repulsion and the 4D strata (default [`DEFAULT_VARIANCE_WEIGHT`], at
@@ -120,6 +128,20 @@ impl Variance {
                 crate::error::number(self.extent)
             )));
         }
+        let e = self.shear_error();
+        if !(e.is_finite() && (0.0..1.0).contains(&e)) {
+            return Err(Error::Input(format!(
+                "target parameter 'shear_error' is {}; give the relative error of the shear to tolerate, at least 0 and below 1 (0.25 for ±25 %)",
+                crate::error::number(e)
+            )));
+        }
+        if e > 0.0 && (self.shear == 0.0 || self.placements() == 0) {
+            return Err(Error::Input(format!(
+                "target parameter 'shear_error' is {e} with shear {} and {} placements; an error of the shear needs a nonzero 'shear' to scale and at least one placement to draw it in (or leave 'shear_error' out)",
+                self.shear,
+                self.placements()
+            )));
+        }
         if self.placements() > MAX_PLACEMENTS {
             return Err(Error::Input(format!(
                 "target parameter 'placements' is {}; give at most {MAX_PLACEMENTS}",
@@ -140,6 +162,7 @@ impl Variance {
     /// `Debug` text, which keys compare's table cache, and its JSON name what was used.
     pub fn resolved(mut self) -> Self {
         self.placements = Some(self.placements());
+        self.shear_error = Some(self.shear_error());
         self.weight = Some(self.weight());
         self.design = Some(self.design());
         self
@@ -153,6 +176,11 @@ impl Variance {
     /// Placements averaged (0: the integrand as written).
     pub fn placements(&self) -> usize {
         self.placements.unwrap_or(DEFAULT_PLACEMENTS)
+    }
+
+    /// The relative shear error tolerated (0: none).
+    pub fn shear_error(&self) -> f64 {
+        self.shear_error.unwrap_or(0.0)
     }
 
     /// The loss weight.
@@ -219,18 +247,37 @@ impl Variance {
 
     fn spectrum_sampled(&self, base: &dyn Integrand, res: usize, m: usize) -> Result<Vec<f64>> {
         let count = self.placements();
-        let placed: Vec<Option<Box<dyn Integrand>>> = (0..count as u64)
-            .map(|p| base.placed(&mut crate::rng::stream(PLACEMENT_SEED, p)))
+        // Each placement's stream places the integrand, then draws the shear's error.
+        let placed: Vec<(Option<Box<dyn Integrand>>, f64)> = (0..count as u64)
+            .map(|p| {
+                let mut rng = crate::rng::stream(PLACEMENT_SEED, p);
+                let f = base.placed(&mut rng);
+                let e = self.shear_error();
+                let shear = if e > 0.0 {
+                    self.shear * (1.0 + rng.random_range(-e..=e))
+                } else {
+                    self.shear
+                };
+                (f, shear)
+            })
             .collect();
-        // A family with nothing to move is its one integrand, whatever `placements` says.
-        let members: Vec<&dyn Integrand> = if count == 0 || placed.iter().any(Option::is_none) {
-            vec![base]
+        // A family with nothing to move is its one integrand, whatever `placements` says, but still
+        // seen through each placement's shear.
+        let unplaced = placed.iter().any(|(f, _)| f.is_none());
+        let members: Vec<(&dyn Integrand, f64)> = if count == 0 {
+            vec![(base, self.shear)]
         } else {
-            placed.iter().flatten().map(|f| f.as_ref()).collect()
+            placed
+                .iter()
+                .map(|(f, shear)| match f {
+                    Some(f) if !unplaced => (f.as_ref(), *shear),
+                    _ => (base, *shear),
+                })
+                .collect()
         };
         let mut total = vec![0.0; res * res];
-        for f in &members {
-            for (t, v) in total.iter_mut().zip(self.power(*f, res, m)) {
+        for (f, shear) in &members {
+            for (t, v) in total.iter_mut().zip(self.power(*f, *shear, res, m)) {
                 *t += v / members.len() as f64;
             }
         }
@@ -243,12 +290,12 @@ impl Variance {
         Ok(total)
     }
 
-    /// `|ĝ|²` of one integrand: `f ∘ S` sampled on an `m × m` grid
-    /// ([`crate::integrands::sampled::sampled_power`]).
-    fn power(&self, f: &dyn Integrand, res: usize, m: usize) -> Vec<f64> {
+    /// `|ĝ|²` of one integrand: `f ∘ S` for the seam-free shear `S` by `shear`, sampled on an
+    /// `m × m` grid ([`crate::integrands::sampled::sampled_power`]).
+    fn power(&self, f: &dyn Integrand, shear: f64, res: usize, m: usize) -> Vec<f64> {
         sampled_power(
             |a, b| {
-                let (x, u) = shear_pair(a, b, self.shear, ShearMode::Transported);
+                let (x, u) = shear_pair(a, b, shear, ShearMode::Transported);
                 f.eval(&[x, u])
             },
             res,
@@ -266,6 +313,7 @@ mod tests {
             integrand: integrand.into(),
             shear,
             placements: Some(placements),
+            shear_error: None,
             extent: 1.0,
             weight: None,
             design: None,
@@ -319,12 +367,47 @@ mod tests {
             let f = base
                 .placed(&mut crate::rng::stream(PLACEMENT_SEED, p))
                 .unwrap();
-            for (a, v) in by_hand.iter_mut().zip(t.power(f.as_ref(), res, 256)) {
+            for (a, v) in by_hand
+                .iter_mut()
+                .zip(t.power(f.as_ref(), t.shear, res, 256))
+            {
                 *a += v / 4.0;
             }
         }
         assert_eq!(mean, by_hand);
         assert_eq!(mean, t.spectrum_sampled(base.as_ref(), res, 256).unwrap());
+    }
+
+    /// With a shear error, each placement is seen through its own shear `shear · (1 + e)`, `e` drawn
+    /// after the placement from its stream and within the range; the mean is over those pairs.
+    #[test]
+    fn shear_errors_average_over_the_drawn_shears() {
+        let mut t = target("sheared:s=0.5", 0.5, 4);
+        t.shear_error = Some(0.25);
+        t.validate().unwrap();
+        let base = spec::parse(&t.integrand).unwrap();
+        let res = 16;
+        let mean = t.spectrum_sampled(base.as_ref(), res, 256).unwrap();
+        let mut by_hand = vec![0.0; res * res];
+        let mut shears = Vec::new();
+        for p in 0..4 {
+            let mut rng = crate::rng::stream(PLACEMENT_SEED, p);
+            let f = base.placed(&mut rng).unwrap();
+            let shear = 0.5 * (1.0 + rng.random_range(-0.25..=0.25));
+            shears.push(shear);
+            for (a, v) in by_hand.iter_mut().zip(t.power(f.as_ref(), shear, res, 256)) {
+                *a += v / 4.0;
+            }
+        }
+        assert_eq!(mean, by_hand);
+        assert!(
+            shears.iter().all(|s| (0.375..=0.625).contains(s)),
+            "{shears:?}"
+        );
+        assert!(shears.iter().any(|&s| s != 0.5), "{shears:?}");
+        // Without the error the same placements give another spectrum (the shears differ).
+        t.shear_error = None;
+        assert_ne!(mean, t.spectrum_sampled(base.as_ref(), res, 256).unwrap());
     }
 
     #[test]
@@ -334,6 +417,20 @@ mod tests {
         assert!(message(target("nosuch:a=1", 0.0, 0)).contains("'integrand'"));
         assert!(message(target("fan:s0=0.3,s1=0.7", f64::NAN, 0)).contains("'shear'"));
         assert!(message(target("fan:s0=0.3,s1=0.7", 0.0, 5000)).contains("'placements'"));
+        for (shear, placements, error) in [
+            (0.5, 4, 1.0),
+            (0.5, 4, -0.1),
+            (0.5, 4, f64::NAN),
+            (0.0, 4, 0.1),
+            (0.5, 0, 0.1),
+        ] {
+            let mut t = target("sheared:s=0.5", shear, placements);
+            t.shear_error = Some(error);
+            assert!(
+                message(t).contains("'shear_error'"),
+                "{shear} {placements} {error}"
+            );
+        }
         let mut t = target("fan:s0=0.3,s1=0.7", 0.0, 0);
         t.extent = 0.0;
         assert!(message(t.clone()).contains("'extent'"));

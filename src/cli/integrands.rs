@@ -24,11 +24,8 @@ pub fn run(args: &IntegrandsArgs) -> Result<()> {
     println!("integrand  {}", f.name());
     println!("dims       {}", f.dims());
     println!("integral   {:.17e} (± {:e})", r.value, r.stderr);
-    if let Some(m) = f.mean_square() {
-        println!(
-            "variance   {:.10e} (of f over the domain)",
-            m - r.value * r.value
-        );
+    if let Some(v) = f.variance() {
+        println!("variance   {v:.10e} (of f over the domain)");
     } else if f.spectral_planes().is_none() {
         // A pixel of the scene: each evaluation traces rays; its variance is what converge measures.
         println!("variance   unknown in closed form (measure it with `anisospec converge`)");

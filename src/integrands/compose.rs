@@ -60,6 +60,9 @@ impl Integrand for Embed {
     fn mean_square(&self) -> Option<f64> {
         self.inner.mean_square()
     }
+    fn variance(&self) -> Option<f64> {
+        self.inner.variance()
+    }
     fn support(&self) -> Vec<usize> {
         let mut s = vec![self.proj.a, self.proj.b];
         s.sort_unstable();
@@ -285,6 +288,17 @@ impl Integrand for Product {
     }
     fn mean_square(&self) -> Option<f64> {
         self.factors.iter().map(|f| f.mean_square()).product()
+    }
+    /// `Π (v_i + m_i²) − Π m_i²` (`v_i` the factors' variances, `m_i` their integrals) built up factor
+    /// by factor as `D ← D (v + m²) + Q v`, `Q ← Q m²`, with no difference of near-equal terms.
+    fn variance(&self) -> Option<f64> {
+        let (mut d, mut q) = (0.0, 1.0);
+        for f in &self.factors {
+            let (v, m2) = (f.variance()?, f.reference().value.powi(2));
+            d = d * (v + m2) + q * v;
+            q *= m2;
+        }
+        Some(d)
     }
     fn support(&self) -> Vec<usize> {
         let mut s: Vec<usize> = self.factors.iter().flat_map(|t| t.support()).collect();

@@ -109,6 +109,13 @@ pub trait Integrand: Send + Sync {
         None
     }
 
+    /// `Var(f) = ∫f² − (∫f)²` over `[0,1)^D` where [`Integrand::mean_square`] is known. Families whose
+    /// variance can be far below their squared mean (a broad Gaussian: `Var f ≈ 1e-12` against
+    /// `(∫f)² ≈ 30`) override it with a form free of that difference's cancellation.
+    fn variance(&self) -> Option<f64> {
+        Some(self.mean_square()? - self.reference().value.powi(2))
+    }
+
     /// The dimensions `f` depends on (sorted); a product needs its factors on disjoint sets.
     fn support(&self) -> Vec<usize> {
         (0..self.dims()).collect()

@@ -487,7 +487,9 @@ pub fn predict_with_progress(
     // Before any work on f (a pixel's reference renders): the prediction needs f̂ on 2D planes.
     let planes = planes_of(f)?;
     let (mean_square, integral) = (mean_square_reference(f), f.reference());
-    let var_f = mean_square.value - integral.value.powi(2);
+    let var_f = f
+        .variance()
+        .unwrap_or(mean_square.value - integral.value.powi(2));
     let var_f_stderr = mean_square
         .stderr
         .hypot(2.0 * integral.value * integral.stderr);

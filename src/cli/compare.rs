@@ -8,9 +8,8 @@ use std::path::PathBuf;
 /// Compare optimized, sheared and classical samplers on analytic integrands and renderer pixels.
 #[derive(Debug, clap::Args)]
 pub struct CompareArgs {
-    /// A TOML study (keys as in the built-in default; see src/compare/config.rs). Every key is
-    /// optional: one left out takes the built-in default's value (see --print-config); an unknown key is
-    /// refused. Without it the built-in default suite runs: a few minutes on 2 cores.
+    /// A TOML study (keys as in the built-in default: --print-config prints them all). Every key is
+    /// optional: one left out takes the built-in default's value; an unknown key is refused. Without it the built-in default suite runs: a few minutes on 2 cores.
     #[arg(long, conflicts_with = "full")]
     pub config: Option<PathBuf>,
     /// Run the paper-scale preset instead of the default (N up to 4096, 1000 realizations; hours).

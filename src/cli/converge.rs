@@ -19,7 +19,7 @@ pub struct ConvergeArgs {
     /// out/cache under the working folder, for the next run.
     #[arg(long)]
     pub integrand: String,
-    /// Sample counts N, comma-separated, e.g. 16,64,256,1024,4096.
+    /// Sample counts N, comma-separated, e.g. 16,64,256,1024,4096 (N × D at most 2^28 coordinates).
     #[arg(
         short = 'n',
         long = "n",
@@ -76,6 +76,12 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
     crate::cli::distinct_counts(&args.n)?;
     crate::output::check_outputs(&outputs, &inputs)?;
     let f = parse(&args.integrand)?;
+    if args.random_placement && f.placed(&mut crate::rng::stream(0, 0)).is_none() {
+        return Err(crate::error::Error::Usage(format!(
+            "--random-placement: {} has nothing to move at random (a pixel of the scene has no placement); leave the flag out",
+            f.name()
+        )));
+    }
     // Build and check every sampler before any work starts.
     let built = args
         .sampler

@@ -50,7 +50,7 @@ pub struct GalleryArgs {
     /// an earlier gallery there (a gallery folder of other files is refused).
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
-    /// Points per set; a sampler that cannot make this N uses its nearest valid N (the index says which).
+    /// Points per set (N × D at most 2^28 coordinates); a sampler that cannot make this N uses its nearest valid N (the index says which).
     #[arg(
         short = 'n',
         long = "n",

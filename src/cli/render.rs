@@ -25,7 +25,7 @@ pub struct RenderArgs {
     /// vector). Not used with --reference.
     #[arg(long, required_unless_present = "reference")]
     pub sampler: Option<String>,
-    /// Samples (rays) per pixel; must be a count the sampler allows.
+    /// Samples (rays) per pixel; must be a count the sampler allows (N × 4 at most 2^28 coordinates).
     #[arg(long, default_value_t = 64, value_parser = crate::cli::parse_count, allow_negative_numbers = true)]
     pub spp: usize,
     /// Seed: pixel i uses stream i of it for its set and its toroidal shift.

@@ -29,7 +29,7 @@ pub struct SpectrumArgs {
     /// Dimensions of the sampler's points (2 or 4).
     #[arg(long, default_value_t = 2)]
     pub dims: usize,
-    /// Points per set (with --sampler).
+    /// Points per set (with --sampler; N × D at most 2^28 coordinates).
     #[arg(
         short = 'n',
         long = "n",

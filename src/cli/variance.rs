@@ -28,7 +28,7 @@ pub struct VarianceArgs {
     /// Integrand, NAME:key=value,... (see `anisospec integrands`), e.g. step:theta=30.
     #[arg(long)]
     pub integrand: String,
-    /// Sample counts N, comma-separated, e.g. 16,64,256,1024.
+    /// Sample counts N, comma-separated, e.g. 16,64,256,1024 (N × D at most 2^28 coordinates).
     #[arg(
         short = 'n',
         long = "n",

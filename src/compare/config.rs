@@ -339,6 +339,12 @@ impl CompareConfig {
                     number(e.shear_range[1])
                 )));
             }
+            if crate::integrands::spec::names_a_pixel(&e.spec) {
+                return Err(Error::Usage(format!(
+                    "{}: spec '{}' is a pixel of the scene, not an analytic integrand (whose integral is exact); list pixels by their oracle class instead, e.g. pixel_classes = [\"hairline\"], which also sets their shears and references",
+                    e.label, e.spec
+                )));
+            }
             let integrand = crate::integrands::parse(&e.spec)
                 .map_err(|err| Error::Usage(format!("{}: spec '{}': {err}", e.label, e.spec)))?;
             if integrand.dims() != 4 {

@@ -728,6 +728,12 @@ fn write_robustness(
     let c = &outcome.config;
     let at = largest_n_index(&c.ns);
     writeln!(w, "\n## Robustness to oracle error\n")?;
+    if outcome.robustness.is_empty() {
+        return writeln!(
+            w,
+            "No sampler of this study uses the oracle's shear (no sheared sampler and no table), so there is nothing to sweep."
+        );
+    }
     writeln!(
         w,
         "At N = {}, the samplers' shear (see Integrands) is scaled by (1 + error) for {} (the sweep). Each cell is the MSE ± its standard \

@@ -129,20 +129,27 @@ pub const FAMILIES: &[Family] = &[
         summary: "fan of sheared edges x + s·u = c, s uniform in [s0, s1]: a double-wedge spectrum",
         keys: &[
             ("s0", "smallest shear (default 0.3)"),
-            ("s1", "largest shear, >= s0 (default 0.7)"),
+            ("s1", "largest shear, > s0 (default 0.7)"),
             ("c", "offset (default (1+(s0+s1)/2)/2: mean edge through the centre)"),
         ],
         build: build_fan,
     },
 ];
 
+/// What a pixel written as a term of a larger spec is told.
+const PIXEL_STANDS_ALONE: &str =
+    "pixel needs its position and stands alone: write pixel:px=COLUMN,py=ROW (no @proj, + or *)";
+
+/// Whether `spec` names a pixel of the scene (`pixel:...`), an integrand whose integral is a
+/// rendered reference with a standard error rather than a closed form.
+pub fn names_a_pixel(spec: &str) -> bool {
+    spec.trim().starts_with("pixel:")
+}
+
 /// The family called `name`.
 pub fn family(name: &str) -> Result<&'static Family> {
     if name == "pixel" {
-        return Err(Error::Usage(
-            "pixel needs its position and stands alone: write pixel:px=COLUMN,py=ROW (no @proj, + or *)"
-                .into(),
-        ));
+        return Err(Error::Usage(PIXEL_STANDS_ALONE.into()));
     }
     FAMILIES.iter().find(|f| f.name == name).ok_or_else(|| {
         let names: Vec<&str> = FAMILIES.iter().map(|f| f.name).collect();
@@ -158,11 +165,14 @@ pub fn parse(spec: &str) -> Result<Box<dyn Integrand>> {
     let spec = spec.trim();
     if spec.is_empty() {
         return Err(Error::Usage(
-            "empty --integrand; write NAME:key=value,..., e.g. step:theta=30 (see `anisospec integrands`)".into(),
+            "empty integrand; write NAME:key=value,..., e.g. step:theta=30 (see `anisospec integrands`)".into(),
         ));
     }
     if let Some(pixel) = spec.strip_prefix("pixel:") {
         // The renderer's pixel integrand is 4D on its own: it takes no placement and no combination.
+        if pixel.contains(['@', '+', '*']) {
+            return Err(Error::Usage(PIXEL_STANDS_ALONE.into()));
+        }
         return crate::render::pixel::parse_pixel_spec(pixel);
     }
     let mut terms: Vec<Box<dyn Integrand>> = Vec::new();

@@ -35,8 +35,9 @@ pub fn write_exr(
     })
 }
 
-/// Reads one channel of the first layer of an EXR image: `Y` if there is one, else `R`, else the first
-/// channel, as `f64` values top row first, with `[height, width]`. Errors are the decoder's words.
+/// Reads one channel of the first layer of an EXR image: `Y` if there is one, else `R`, else its only
+/// channel, as `f64` values top row first, with `[height, width]`. Several channels none of which is
+/// `Y` or `R` are refused, naming them. Errors are the decoder's words or name the channels.
 pub fn read_exr_channel(path: &Path) -> std::result::Result<(Vec<f64>, [usize; 2]), String> {
     let image = exr::prelude::read_first_flat_layer_from_file(path).map_err(|e| e.to_string())?;
     let layer = image.layer_data;
@@ -44,8 +45,18 @@ pub fn read_exr_channel(path: &Path) -> std::result::Result<(Vec<f64>, [usize; 2
     let pick = ["Y", "R"]
         .iter()
         .find_map(|want| channels.iter().find(|c| c.name.to_string() == *want))
-        .or_else(|| channels.first())
-        .ok_or("the image has no channel")?;
+        .or_else(|| (channels.len() == 1).then(|| &channels[0]))
+        .ok_or_else(|| {
+            let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
+            if names.is_empty() {
+                "the image has no channel".to_string()
+            } else {
+                format!(
+                    "channels {} and none named Y or R, so which one is meant is unclear",
+                    names.join(", ")
+                )
+            }
+        })?;
     let values = pick
         .sample_data
         .values_as_f32()

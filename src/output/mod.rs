@@ -236,8 +236,31 @@ pub fn write_folder<T>(
         for folder in created.iter().rev() {
             let _ = std::fs::remove_dir(folder);
         }
+    } else {
+        warn_left_staging(dest);
     }
     result
+}
+
+/// Warns of temporary folders of this crate left in `dest` (this run's own is gone by now): a run
+/// that was killed leaves one behind. They are named, not removed, since another run may be
+/// writing into one of them right now.
+fn warn_left_staging(dest: &Path) {
+    let Ok(entries) = std::fs::read_dir(dest) else {
+        return;
+    };
+    let mut left: Vec<String> = entries
+        .filter_map(|e| e.ok())
+        .filter(|e| is_staging(&e.file_name()) && is_real_folder(&e.path()))
+        .map(|e| e.path().display().to_string())
+        .collect();
+    left.sort();
+    for folder in left {
+        eprintln!(
+            "warning: {folder} is a temporary folder of a run that stopped before it finished (or of one still running); remove it once no other run writes to {}",
+            dest.display()
+        );
+    }
 }
 
 /// Makes `dest` and its missing ancestors, outermost first, and lists in `created` the folders this
@@ -517,9 +540,10 @@ pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<()> {
         }
         if let Some(blocker) = out.parent().and_then(file_in_the_way) {
             return Err(Error::Usage(format!(
-                "cannot write {}: {} is a file, not a folder; choose another output path",
+                "cannot write {}: {} is {}, not a folder; choose another output path",
                 out.display(),
-                blocker.display()
+                blocker.display(),
+                what_is(blocker)
             )));
         }
         let dir = folder_of(out);
@@ -572,15 +596,32 @@ pub fn check_folder(dir: &Path, flag: &str, what: &str) -> Result<()> {
     match file_in_the_way(dir) {
         Some(file) => {
             let place = if file == dir {
-                format!("{} is a file", dir.display())
+                format!("{} is {}", dir.display(), what_is(file))
             } else {
-                format!("{} lies under {}, a file", dir.display(), file.display())
+                format!(
+                    "{} lies under {}, {}",
+                    dir.display(),
+                    file.display(),
+                    what_is(file)
+                )
             };
             Err(Error::Usage(format!(
                 "{flag} {place}, not a folder, so no {what} folder can be written there; give {flag} a folder path"
             )))
         }
         None => Ok(()),
+    }
+}
+
+/// What a path that stands in the way of a folder is: a file, or a link that leads nowhere.
+fn what_is(path: &Path) -> &'static str {
+    let link = path
+        .symlink_metadata()
+        .is_ok_and(|m| m.file_type().is_symlink());
+    if link && !path.exists() {
+        "a link to nothing (a dangling symbolic link)"
+    } else {
+        "a file"
     }
 }
 

@@ -136,8 +136,13 @@ pub fn parse_npy_array(
     };
     let held = bytes.len() - data_start;
     if count.checked_mul(item) != Some(held) {
+        let why = if count.checked_mul(item).is_some_and(|need| need < held) {
+            "the file has bytes after its array (appended to) or its header is wrong"
+        } else {
+            "the file is cut short or its header is wrong"
+        };
         return Err(format!(
-            "the header's shape {shape:?} needs {count} values of {item} bytes but the file holds {held} bytes of data; the file is cut short or its header is wrong"
+            "the header's shape {shape:?} needs {count} values of {item} bytes but the file holds {held} bytes of data; {why}"
         ));
     }
     let fortran = npy.order() == npyz::Order::Fortran;
@@ -430,12 +435,17 @@ mod tests {
             &[],
         ));
         assert!(e.contains("more elements"), "{e}");
-        for (shape, values) in [("(1, 4, 2)", 6), ("(1, 2, 2)", 6), ("(1, 134217728, 4)", 0)] {
+        for (shape, values, why) in [
+            ("(1, 4, 2)", 6, "cut short or its header is wrong"),
+            (
+                "(1, 2, 2)",
+                6,
+                "bytes after its array (appended to) or its header is wrong",
+            ),
+            ("(1, 134217728, 4)", 0, "cut short or its header is wrong"),
+        ] {
             let e = message(npy("<f8", false, shape, &f8(&vec![0.5; values])));
-            assert!(
-                e.contains("cut short or its header is wrong"),
-                "{shape}: {e}"
-            );
+            assert!(e.contains(why), "{shape}: {e}");
         }
         assert!(parse_npy(&npy("<f8", false, "(1, 2, 2)", &f8(&[0.5; 4]))).is_ok());
     }

@@ -170,12 +170,17 @@ pub fn reference_image(
     check_ref_count(count)?;
     let (w, h) = (scene.width(), scene.height());
     let file = cache_dir.map(|d| reference_cache_file(scene, count, d));
-    if let Some(img) = file
-        .as_deref()
-        .and_then(|f| read_reference(f, w * h, count))
-    {
-        progress.finish_and_clear();
-        return Ok(img);
+    if let Some(f) = file.as_deref().filter(|f| f.exists()) {
+        match read_reference(f, w * h, count) {
+            Some(img) => {
+                progress.finish_and_clear();
+                return Ok(img);
+            }
+            None => eprintln!(
+                "warning: the cached reference {} is unreadable or not a reference of this scene (shape, or a value that is negative or not finite); computing it again",
+                f.display()
+            ),
+        }
     }
     let cam = scene.camera();
     let rows: Vec<Vec<(f64, f64)>> = (0..h)
@@ -207,7 +212,11 @@ pub fn reference_image(
     };
     if let Some(f) = file {
         let data: Vec<f64> = pairs.iter().flat_map(|&(v, s)| [v, s]).collect();
-        crate::output::write_npy(&f, &[h, w, 2], &data)?;
+        // As for a pixel's reference: a cache that cannot be written costs the next run the work,
+        // not this run its result.
+        if let Err(e) = crate::output::write_npy(&f, &[h, w, 2], &data) {
+            eprintln!("warning: the reference image was computed but not cached: {e}");
+        }
     }
     Ok(img)
 }
@@ -216,7 +225,8 @@ fn read_reference(file: &Path, pixels: usize, count: usize) -> Option<ReferenceI
     let bytes = std::fs::read(file).ok()?;
     let npy = npyz::NpyFile::new(&bytes[..]).ok()?;
     let data = npy.into_vec::<f64>().ok()?;
-    if data.len() != 2 * pixels || data.iter().any(|v| !v.is_finite()) {
+    // Radiance and its standard error are finite and never negative (albedos in [0, 1]).
+    if data.len() != 2 * pixels || data.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
         return None;
     }
     Some(ReferenceImage {

@@ -167,6 +167,12 @@ impl PixelIntegrand {
             if let Some(r) = read_cached(&file, &key) {
                 return r;
             }
+            if file.exists() {
+                eprintln!(
+                    "warning: the cached reference {} is unreadable or not this pixel's (its key, or a value that is negative or not finite); computing it again",
+                    file.display()
+                );
+            }
             let r = stratified_reference(|p| self.value(p), self.ref_count, 1);
             let json = serde_json::json!({"key": key, "value": r.value, "stderr": r.stderr});
             let written = crate::output::write_atomic(&file, |w| {
@@ -191,7 +197,9 @@ fn read_cached(file: &Path, key: &str) -> Option<Reference> {
     }
     let value = v.get("value")?.as_f64()?;
     let stderr = v.get("stderr")?.as_f64()?;
-    (value.is_finite() && stderr.is_finite()).then_some(Reference { value, stderr })
+    // Radiance and its standard error are finite and never negative (albedos in [0, 1]).
+    let valid = |v: f64| v.is_finite() && v >= 0.0;
+    (valid(value) && valid(stderr)).then_some(Reference { value, stderr })
 }
 
 impl Integrand for PixelIntegrand {

@@ -203,7 +203,6 @@ impl SceneConfig {
         }
         let tan_y = (self.fov.to_radians() / 2.0).tan();
         let tan_x = tan_y * self.width as f64 / self.height as f64;
-        let scale = self.aperture * self.height as f64 / (2.0 * tan_y);
         let h = self.aperture / 2.0;
         let p = DVec3::from_array(self.position);
         // Steepest lateral slope of a ray (per unit of depth): pixel slope plus lens offset / focus.
@@ -219,8 +218,8 @@ impl SceneConfig {
             d_lo = d_lo.min(d);
         }
         let d_hi = ROOM_MAX.z - p.z;
-        let inv_f = 1.0 / self.focus;
-        scale * (1.0 / d_lo - inv_f).abs().max((1.0 / d_hi - inv_f).abs())
+        let camera = Camera::new(self);
+        camera.shear(d_lo).abs().max(camera.shear(d_hi).abs())
     }
 
     /// A stable text key for caches: the configuration as JSON.

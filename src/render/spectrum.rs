@@ -8,14 +8,13 @@
 //! projection of a sampling spectrum in the variance formula of DESIGN §4.
 //!
 //! `g` is sampled at the cell centres `(j + ½)/K, (i + ½)/K` of a `K × K` grid and transformed with
-//! rustfft. The result is `|f̂(k1, k2)|²` with `f̂(k) ≈ (1/K²) Σ g e^{−2πi k·c}`, laid out like every
+//! rustfft ([`sampled_power`]). The result is `|f̂(k1, k2)|²` with `f̂(k) ≈ (1/K²) Σ g e^{−2πi k·c}`, laid out like every
 //! spectrum of the project: `P[i·K + j]` at `k1 = j − K/2` (first projected dim), `k2 = i − K/2`.
 
 use crate::error::Result;
+use crate::integrands::sampled::sampled_power;
 use crate::points::Projection;
 use crate::spectrum::check_res;
-use rayon::prelude::*;
-use rustfft::{num_complex::Complex64, FftPlanner};
 
 /// The `res × res` slice spectrum of `f` (e.g. `|p| pixel.value(p)`) for `proj`, averaging the other two coordinates over an
 /// `average × average` midpoint grid. `res` must be even and positive; `average ≥ 1`.
@@ -31,47 +30,22 @@ where
         ));
     }
     let others: Vec<usize> = (0..4).filter(|&d| d != proj.a && d != proj.b).collect();
-    let k = res as f64;
     let m = average as f64;
-    let mut grid: Vec<Complex64> = (0..res * res)
-        .into_par_iter()
-        .map(|idx| {
-            let (i, j) = (idx / res, idx % res);
-            let mut p = [0.5; 4];
-            p[proj.a] = (j as f64 + 0.5) / k;
-            p[proj.b] = (i as f64 + 0.5) / k;
-            let mut sum = 0.0;
-            for a in 0..average {
-                for b in 0..average {
-                    p[others[0]] = (a as f64 + 0.5) / m;
-                    p[others[1]] = (b as f64 + 0.5) / m;
-                    sum += f(p);
-                }
+    let averaged = |a: f64, b: f64| {
+        let mut p = [0.5; 4];
+        p[proj.a] = a;
+        p[proj.b] = b;
+        let mut sum = 0.0;
+        for i in 0..average {
+            for j in 0..average {
+                p[others[0]] = (i as f64 + 0.5) / m;
+                p[others[1]] = (j as f64 + 0.5) / m;
+                sum += f(p);
             }
-            Complex64::new(sum / (m * m), 0.0)
-        })
-        .collect();
-    let fft = FftPlanner::new().plan_fft_forward(res);
-    // Rows (along the first projected dim), then columns via a transpose.
-    grid.chunks_exact_mut(res).for_each(|row| fft.process(row));
-    let mut t = transpose(&grid, res);
-    t.chunks_exact_mut(res).for_each(|col| fft.process(col));
-    let spec = transpose(&t, res);
-    let norm = 1.0 / (k * k);
-    let half = res / 2;
-    let mut out = vec![0.0; res * res];
-    for i in 0..res {
-        for j in 0..res {
-            // Output row i is k2 = i − K/2, i.e. FFT bin (i + K/2) mod K; same for columns.
-            let src = ((i + half) % res) * res + (j + half) % res;
-            out[i * res + j] = (spec[src] * norm).norm_sqr();
         }
-    }
-    Ok(out)
-}
-
-fn transpose(a: &[Complex64], n: usize) -> Vec<Complex64> {
-    (0..n * n).map(|idx| a[(idx % n) * n + idx / n]).collect()
+        sum / (m * m)
+    };
+    Ok(sampled_power(averaged, res, res))
 }
 
 /// Smallest side of the PNG view; smaller grids are scaled up by an integer factor (nearest).

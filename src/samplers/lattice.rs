@@ -212,14 +212,29 @@ impl Sampler for GivenLattice {
             return Ok(());
         };
         let (r, factor) = (residue(zd), gcd(residue(zd), n));
-        // The residue nearest r that is coprime to n, the smaller on ties (1 always is), suggested
-        // as the entry nearest zd with that residue.
-        let coprime = (1..n)
-            .flat_map(|step| [r.checked_sub(step), Some(r + step)])
-            .flatten()
-            .find(|&c| (1..n).contains(&c) && gcd(c, n) == 1)
+        // The residue nearest r that is coprime to n and that no other entry has (two equal
+        // residues put two axes on one diagonal), the smaller on ties; else the nearest coprime one
+        // (1 always is). Suggested as the entry nearest zd with that residue that fits in a u64.
+        let taken: Vec<usize> = self
+            .z
+            .iter()
+            .enumerate()
+            .filter(|&(e, _)| e != d)
+            .map(|(_, &z)| residue(z))
+            .collect();
+        let nearest_coprime = |free: &dyn Fn(usize) -> bool| {
+            (1..n)
+                .flat_map(|step| [r.checked_sub(step), Some(r + step)])
+                .flatten()
+                .find(|&c| (1..n).contains(&c) && gcd(c, n) == 1 && free(c))
+        };
+        let coprime = nearest_coprime(&|c| !taken.contains(&c))
+            .or_else(|| nearest_coprime(&|_| true))
             .unwrap_or(1);
-        let suggestion = zd - r as u64 + coprime as u64;
+        let base = zd - r as u64;
+        let suggestion = base
+            .checked_add(coprime as u64)
+            .unwrap_or_else(|| base - (n - coprime) as u64);
         let axis = ["x", "y", "u", "v"][d];
         let values = match n / factor {
             1 => "a single value".to_string(),
@@ -295,10 +310,18 @@ mod tests {
             }
         }
         assert!(GivenLattice { z: vec![1, 34] }.check_parameters(89).is_ok());
+        let near_max = format!(
+            "give an entry coprime to 15 instead, e.g. {}",
+            u64::MAX - 13
+        );
         for (z, n, says) in [
             (vec![0, 0], 8, "the entry 0 for x shares the factor 8 with N = 8, so x takes a single value"),
             (vec![1, 4], 8, "the entry 4 for y shares the factor 4 with N = 8, so y takes only 2 distinct values; give an entry coprime to 8 instead, e.g. 3"),
             (vec![1, 163, 271, 141], 9, "the entry 141 for v shares the factor 3 with N = 9, so v takes only 3 distinct values; give an entry coprime to 9 instead, e.g. 140"),
+            // 1 and 3 are nearer but taken by x and u: y = 1 would put x and y on one diagonal.
+            (vec![1, 2, 3, 4], 16, "the entry 2 for y shares the factor 2 with N = 16, so y takes only 8 distinct values; give an entry coprime to 16 instead, e.g. 5"),
+            // The entry nearest u64::MAX with residue 2 lies below it (u64::MAX is 0 mod 15).
+            (vec![1, u64::MAX], 15, near_max.as_str()),
         ] {
             let e = GivenLattice { z }.check_parameters(n).unwrap_err();
             assert_eq!(e.exit_code(), 2);

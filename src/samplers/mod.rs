@@ -88,8 +88,9 @@ pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
     coordinate_count(1, n, sampler.dims()).map_err(Error::Usage)?;
     sampler.check_n(n).map_err(|nearest| {
         Error::Usage(format!(
-            "{} cannot make {n} points; the nearest N it allows is {nearest}",
-            sampler.name()
+            "{} cannot make {n} point{}; the nearest N it allows is {nearest}",
+            sampler.name(),
+            if n == 1 { "" } else { "s" }
         ))
     })?;
     sampler.check_parameters(n)

@@ -165,7 +165,7 @@ pub struct BlueNoise {
 }
 
 /// A target read from an image of `T` values: a 2D npy array (`float64` or `float32`, shape
-/// `[rows, cols]`, row 0 lowest) or an EXR image (one channel, `Y`, `R` or the first; top row highest,
+/// `[rows, cols]`, row 0 lowest) or an EXR image (its `Y` channel, else `R`, else its only one; top row highest,
 /// the layout `anisospec spectrum -o FILE.exr` writes, so a measured spectrum can serve as a target).
 ///
 /// The image covers normalized frequencies `ν1, ν2 ∈ [−extent, extent)`: column `j` of `cols` spans
@@ -787,7 +787,7 @@ fn image_value(img: &Image, nu1: f64, nu2: f64) -> f64 {
 fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
     let bad = |why: String| {
         Error::Input(format!(
-            "{}: not a usable target image ({why}); give a 2D float64 or float32 npy array, or a one-channel EXR image, of values >= 0",
+            "{}: not a usable target image ({why}); give a 2D float64 or float32 npy array, or an EXR image (its Y channel, else R, else its only channel), of values >= 0",
             path.display()
         ))
     };
@@ -817,12 +817,17 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
         .enumerate()
         .find(|(_, v)| !v.is_finite() || **v < 0.0)
     {
-        return Err(bad(format!(
-            "pixel ({}, {}) is {}",
-            at / cols,
-            at % cols,
-            number(*v)
-        )));
+        // Named as the file holds it: an EXR's rows count from the top, an npy's from row 0.
+        let (row, col) = (at / cols, at % cols);
+        let place = if is_exr {
+            format!(
+                "the pixel in row {} from the top, column {col},",
+                rows - 1 - row
+            )
+        } else {
+            format!("the value at [{row}, {col}]")
+        };
+        return Err(bad(format!("{place} is {}", number(*v))));
     }
     Ok((pixels, [rows, cols]))
 }
@@ -841,6 +846,28 @@ fn read_npy_image(path: &Path, bad: &dyn Fn(String) -> Error) -> Result<(Vec<f64
 mod tests {
     use super::*;
     use std::f64::consts::{PI, SQRT_2};
+
+    /// A bad value of an image target is named where the file holds it (an EXR's rows from the top,
+    /// an npy's indices), and an EXR of several channels none of which is Y or R is refused.
+    #[test]
+    fn image_errors_name_the_files_own_places() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut values = vec![0.5f64; 4 * 3];
+        values[3 + 2] = f64::NAN; // row 1, column 2 of a 4 x 3 image
+        let npy = dir.path().join("t.npy");
+        crate::output::write_npy(&npy, &[4, 3], &values).unwrap();
+        let e = read_image(&npy).unwrap_err().to_string();
+        assert!(e.contains("the value at [1, 2] is NaN"), "{e}");
+        let exr = dir.path().join("t.exr");
+        let f32s: Vec<f32> = values.iter().map(|&v| v as f32).collect();
+        crate::output::image::write_exr(&exr, 3, 4, &[("Y", f32s.clone())]).unwrap();
+        let e = read_image(&exr).unwrap_err().to_string();
+        assert!(e.contains("row 1 from the top, column 2, is NaN"), "{e}");
+        let two = dir.path().join("two.exr");
+        crate::output::image::write_exr(&two, 3, 4, &[("A", f32s.clone()), ("B", f32s)]).unwrap();
+        let e = read_image(&two).unwrap_err().to_string();
+        assert!(e.contains("channels A, B and none named Y or R"), "{e}");
+    }
 
     #[test]
     fn parse_rejects_bad_files() {

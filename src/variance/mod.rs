@@ -216,7 +216,12 @@ fn pulled_back_spectrum(
             p.name()
         )));
     }
-    let m = (4 * res).max(256).next_power_of_two();
+    // Saturating: a grid beyond the limit is refused below, whatever --res-per-n asked for.
+    let m = res
+        .saturating_mul(4)
+        .max(256)
+        .checked_next_power_of_two()
+        .unwrap_or(usize::MAX);
     if m > MAX_PULLBACK_SAMPLES {
         return Err(Error::Usage(format!(
             "a sheared sampler's prediction samples the pulled-back integrand on {m} x {m} points for a {res} x {res} frequency grid, more than the largest, {MAX_PULLBACK_SAMPLES} x {MAX_PULLBACK_SAMPLES}; lower --res or --res-per-n so that K is at most {}",
@@ -500,7 +505,11 @@ pub fn predict_with_progress(
     for &n in ns {
         let res = cfg
             .res_per_n
-            .map_or(cfg.res, |m| cfg.res.max((m * n).div_ceil(2) * 2));
+            // Saturating: a grid beyond the limit is refused by the spectrum's own check.
+            .map_or(cfg.res, |m| {
+                cfg.res
+                    .max(m.saturating_mul(n).div_ceil(2).saturating_mul(2))
+            });
         if spec.as_ref().is_none_or(|s| s.0 != res) {
             // The bar counts realizations; say what runs before them (a fan's coefficients on a
             // 1024 x 1024 grid take minutes).

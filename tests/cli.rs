@@ -3239,3 +3239,100 @@ fn extreme_scene_and_strata_numbers_are_echoed_in_short_form() {
         &table,
     );
 }
+
+/// A cached reference image that holds a negative radiance is computed again, with a warning naming
+/// the file, and the cache then holds the same numbers as before it was spoiled; a cache that cannot
+/// be written costs only a warning, after the reference is shown.
+#[test]
+fn spoiled_or_unwritable_reference_caches_are_recomputed_or_warned_of() {
+    let (dir, out) = tmp("r.exr");
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, "width = 4\nheight = 4\n").unwrap();
+    let cache = dir.path().join("cache");
+    let args = [
+        "render",
+        "--reference",
+        "--ref-count",
+        "1024",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let o = anisospec(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cached: Vec<PathBuf> = std::fs::read_dir(&cache)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    let [file] = &cached[..] else {
+        panic!("one cached image: {cached:?}")
+    };
+    let good = std::fs::read(file).unwrap();
+    // The first value of the data (after the npy header) is the first pixel's radiance.
+    let mut spoiled = good.clone();
+    let data = spoiled.len() - 4 * 4 * 2 * 8;
+    spoiled[data..data + 8].copy_from_slice(&(-1.0f64).to_le_bytes());
+    std::fs::write(file, &spoiled).unwrap();
+    let o = anisospec(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("computing it again") && err.contains(&file.display().to_string()),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(file).unwrap(), good);
+
+    let unwritable = "/proc/anisospec-test-cache";
+    let mut args = args.to_vec();
+    args[7] = unwritable;
+    let o = anisospec(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("computed but not cached"), "{err}");
+}
+
+/// `--random-placement` on an integrand with nothing to move (a pixel) is refused, not ignored;
+/// `compare` refuses a pixel among its analytic integrands, pointing to `pixel_classes`.
+#[test]
+fn pixels_refuse_what_only_analytic_integrands_take() {
+    let (dir, out) = tmp("c.csv");
+    rejects(
+        &[
+            "converge",
+            "--sampler",
+            "sobol",
+            "--integrand",
+            "pixel:px=1,py=1,refcount=1024",
+            "-n",
+            "16,64",
+            "--realizations",
+            "4",
+            "--random-placement",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "has nothing to move",
+        &out,
+    );
+    let config = dir.path().join("study.toml");
+    std::fs::write(
+        &config,
+        "[[analytic]]\nlabel = \"p\"\nspec = \"pixel:px=3,py=3\"\nshear = [0.5, 0.5]\nshear_range = [0.5, 0.5]\n",
+    )
+    .unwrap();
+    let report = dir.path().join("report");
+    rejects(
+        &[
+            "compare",
+            "--config",
+            config.to_str().unwrap(),
+            "--out",
+            report.to_str().unwrap(),
+        ],
+        "pixel_classes",
+        &report,
+    );
+}

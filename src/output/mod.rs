@@ -246,21 +246,27 @@ pub fn write_folder<T>(
 /// that was killed leaves one behind. They are named, not removed, since another run may be
 /// writing into one of them right now.
 fn warn_left_staging(dest: &Path) {
-    let Ok(entries) = std::fs::read_dir(dest) else {
-        return;
-    };
-    let mut left: Vec<String> = entries
-        .filter_map(|e| e.ok())
-        .filter(|e| is_staging(&e.file_name()) && is_real_folder(&e.path()))
-        .map(|e| e.path().display().to_string())
-        .collect();
-    left.sort();
-    for folder in left {
+    for folder in left_staging(dest) {
         eprintln!(
-            "warning: {folder} is a temporary folder of a run that stopped before it finished (or of one still running); remove it once no other run writes to {}",
+            "warning: {} is a temporary folder of a run that stopped before it finished (or of one still running); remove it once no other run writes to {}",
+            folder.display(),
             dest.display()
         );
     }
+}
+
+/// The temporary folders of this crate in `dest`, sorted.
+fn left_staging(dest: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dest) else {
+        return Vec::new();
+    };
+    let mut left: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok())
+        .filter(|e| is_staging(&e.file_name()) && is_real_folder(&e.path()))
+        .map(|e| e.path())
+        .collect();
+    left.sort();
+    left
 }
 
 /// Makes `dest` and its missing ancestors, outermost first, and lists in `created` the folders this
@@ -778,6 +784,16 @@ mod tests {
             "a file no manifest lists is not the report's"
         );
         assert!(leftovers(&report).is_empty());
+        // A killed run's staging folder stays (another run may be writing there) and is named once
+        // a run into the folder succeeds; this run's own is gone by then.
+        assert!(left_staging(&report).is_empty());
+        let killed = report.join(".anisospec-killed");
+        std::fs::create_dir(&killed).unwrap();
+        write_folder(&report, MARK, |stage| {
+            write_atomic(&stage.join("a.md"), |w| writeln!(w, "again"))
+        })
+        .unwrap();
+        assert_eq!(left_staging(&report), vec![killed]);
     }
 
     /// A new report replaces the earlier one: the files and folders its manifest lists and the new one

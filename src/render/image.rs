@@ -44,14 +44,10 @@ pub fn pixel_points(
 
 /// The estimate `(1/n) Σ f_p(x_j)` of pixel `(px, py)` over the points of [`pixel_points`].
 pub fn estimate_pixel(scene: &Scene, px: usize, py: usize, points: &[f64]) -> f64 {
-    let cam = scene.camera();
     let n = points.len() / 4;
     let sum: f64 = points
         .chunks_exact(4)
-        .map(|p| {
-            let (o, d) = cam.ray(px, py, [p[0], p[1], p[2], p[3]]);
-            scene.radiance(o, d)
-        })
+        .map(|p| scene.pixel_radiance(px, py, [p[0], p[1], p[2], p[3]]))
         .sum();
     sum / n as f64
 }
@@ -182,17 +178,13 @@ pub fn reference_image(
             ),
         }
     }
-    let cam = scene.camera();
     let rows: Vec<Vec<(f64, f64)>> = (0..h)
         .into_par_iter()
         .map(|py| {
             let row = (0..w)
                 .map(|px| {
                     let r = stratified_reference(
-                        |p| {
-                            let (o, d) = cam.ray(px, py, p);
-                            scene.radiance(o, d)
-                        },
+                        |p| scene.pixel_radiance(px, py, p),
                         count,
                         (py * w + px) as u32,
                     );

@@ -139,8 +139,7 @@ impl PixelIntegrand {
 
     /// `f(x, y, u, v)`: radiance of the ray through pixel point `(x, y)` and lens point `(u, v)`.
     pub fn value(&self, p: [f64; 4]) -> f64 {
-        let (o, d) = self.scene.camera().ray(self.px, self.py, p);
-        self.scene.radiance(o, d)
+        self.scene.pixel_radiance(self.px, self.py, p)
     }
 
     fn cache_key(&self) -> String {

@@ -317,6 +317,13 @@ impl Scene {
         self.intersect(origin, dir).map_or(0.0, |h| self.shade(&h))
     }
 
+    /// The pixel integrand `f(x, y, u, v)` of pixel `(px, py)`: the radiance of the camera's ray
+    /// through pixel point `(x, y)` and lens point `(u, v)`, `p` in `[0,1)^4`.
+    pub fn pixel_radiance(&self, px: usize, py: usize, p: [f64; 4]) -> f64 {
+        let (origin, dir) = self.camera.ray(px, py, p);
+        self.radiance(origin, dir)
+    }
+
     /// Depth (distance along the optical axis `z` from the lens plane) of the first surface on the ray,
     /// or `None` if it escapes.
     pub fn depth(&self, origin: DVec3, dir: DVec3) -> Option<f64> {

@@ -288,8 +288,12 @@ impl CompareConfig {
             for sampler in &built {
                 for &n in &self.ns {
                     let n = crate::samplers::usable_n(sampler.as_ref(), n);
-                    crate::samplers::validate_n(sampler.as_ref(), n)
-                        .map_err(|e| Error::Usage(format!("ns: {e}")))?;
+                    // A size the sampler cannot make is the study's; a table file that cannot be
+                    // read (a family's, read for this N) is the file's, named as it is.
+                    crate::samplers::validate_n(sampler.as_ref(), n).map_err(|e| match e {
+                        Error::Usage(m) => Error::Usage(format!("ns: {m}")),
+                        other => other,
+                    })?;
                 }
             }
         }

@@ -731,7 +731,7 @@ fn write_robustness(
     if outcome.robustness.is_empty() {
         return writeln!(
             w,
-            "No sampler of this study uses the oracle's shear (no sheared sampler and no table), so there is nothing to sweep."
+            "Nothing to sweep: the sweep covers the samplers moved by the seam-free shear (transported sheared samplers and tables) on integrands whose shear is not 0 (not in focus), and this study has none."
         );
     }
     writeln!(

@@ -152,6 +152,12 @@ impl Integrand for Sum {
     fn fourier_error(&self) -> f64 {
         self.terms.iter().map(|t| t.fourier_error()).sum()
     }
+    /// Terms on disjoint dimensions are uncorrelated, so the variance is the sum of the terms' own
+    /// (free of the cancellation of `∫f² − (∫f)²`); `None` when terms overlap, as for `∫f²`.
+    fn variance(&self) -> Option<f64> {
+        self.mean_square()?;
+        self.terms.iter().map(|t| t.variance()).sum()
+    }
     /// Known when every term's `∫f_i²` is known and every pair of terms depends on disjoint
     /// dimensions (then `∫f_i f_j = ∫f_i ∫f_j`).
     fn mean_square(&self) -> Option<f64> {

@@ -170,7 +170,11 @@ pub fn parse(spec: &str) -> Result<Box<dyn Integrand>> {
     }
     if let Some(pixel) = spec.strip_prefix("pixel:") {
         // The renderer's pixel integrand is 4D on its own: it takes no placement and no combination.
-        if pixel.contains(['@', '+', '*']) {
+        // A scene path may hold these characters; the other keys' values may not.
+        let joined = pixel
+            .split(',')
+            .any(|kv| !kv.trim().starts_with("scene=") && kv.contains(['@', '+', '*']));
+        if joined {
             return Err(Error::Usage(PIXEL_STANDS_ALONE.into()));
         }
         return crate::render::pixel::parse_pixel_spec(pixel);
@@ -315,6 +319,20 @@ pub fn listing() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A pixel joined to other terms is told it stands alone, but a scene path holding `+`, `@` or
+    /// `*` is a path (here a missing one, so the scene's own error).
+    #[test]
+    fn a_pixel_stands_alone_but_its_scene_path_is_free() {
+        let message = |spec: &str| parse(spec).err().expect("refused").to_string();
+        let alone = message("pixel:px=1,py=1,refcount=1024@xu");
+        assert!(alone.contains("stands alone"), "{alone}");
+        let path = message("pixel:px=1,py=1,scene=/nonexistent/c++/a@b*c.toml");
+        assert!(
+            !path.contains("stands alone") && path.contains("c++/a@b*c.toml"),
+            "{path}"
+        );
+    }
 
     #[test]
     fn parses_atoms_sums_and_products() {

@@ -105,8 +105,8 @@ mod tests {
 
     /// The transported shear is measure-preserving: uniform random pattern points stay uniform, so
     /// each of 16 coarse cells holds a binomial count of mean M/16 (M = 400 000 points, standard
-    /// deviation sqrt(M (1/16)(15/16)) = 153), here within 4.5 of them (1.1e-3 of all 80 cells over
-    /// 5 shears would exceed it by chance; a map 5 % off uniform on a cell, 1250 points, fails).
+    /// deviation sqrt(M (1/16)(15/16)) = 153), here within 4.5 of them (by chance one of the 80 cells
+    /// over 5 shears would exceed it with probability 80 · 2Φ(−4.5) = 5.4e-4; a map 5 % off uniform on a cell, 1250 points, fails).
     #[test]
     fn transport_is_uniform_and_stratifies_t() {
         use rand::Rng as _;

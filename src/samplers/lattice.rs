@@ -212,15 +212,16 @@ impl Sampler for GivenLattice {
             return Ok(());
         };
         let (r, factor) = (residue(zd), gcd(residue(zd), n));
-        // The residue nearest r that is coprime to n and that no other entry has (two equal
-        // residues put two axes on one diagonal), the smaller on ties; else the nearest coprime one
-        // (1 always is). Suggested as the entry nearest zd with that residue that fits in a u64.
+        // The residue nearest r that is coprime to n and that no other entry has, nor its negative
+        // (equal residues put two axes on one diagonal, opposite ones on an anti-diagonal), the
+        // smaller on ties; else the nearest coprime one (1 always is). Suggested as the entry
+        // nearest zd with that residue that fits in a u64.
         let taken: Vec<usize> = self
             .z
             .iter()
             .enumerate()
             .filter(|&(e, _)| e != d)
-            .map(|(_, &z)| residue(z))
+            .flat_map(|(_, &z)| [residue(z), (n - residue(z)) % n])
             .collect();
         let nearest_coprime = |free: &dyn Fn(usize) -> bool| {
             (1..n)
@@ -320,6 +321,8 @@ mod tests {
             (vec![1, 163, 271, 141], 9, "the entry 141 for v shares the factor 3 with N = 9, so v takes only 3 distinct values; give an entry coprime to 9 instead, e.g. 140"),
             // 1 and 3 are nearer but taken by x and u: y = 1 would put x and y on one diagonal.
             (vec![1, 2, 3, 4], 16, "the entry 2 for y shares the factor 2 with N = 16, so y takes only 8 distinct values; give an entry coprime to 16 instead, e.g. 5"),
+            // 1 is nearer but −15 mod 16: y = 1 would put the points on x + y ≡ 0.
+            (vec![15, 2], 16, "give an entry coprime to 16 instead, e.g. 3"),
             // The entry nearest u64::MAX with residue 2 lies below it (u64::MAX is 0 mod 15).
             (vec![1, u64::MAX], 15, near_max.as_str()),
         ] {

@@ -32,9 +32,11 @@ pub trait Sampler: Send + Sync {
     /// which it does.
     fn check_n(&self, n: usize) -> std::result::Result<(), usize>;
 
-    /// A usage error, naming the parameter at fault and a fix, if the construction exists for `n`
-    /// (it passed [`Sampler::check_n`]) but its parameters make a degenerate set there (a lattice
-    /// whose generating vector shares a factor with `n`). Most samplers have no such parameters.
+    /// An error, naming the parameter or file at fault and a fix, if the construction exists for `n`
+    /// (it passed [`Sampler::check_n`]) but cannot make sets there: a usage error for parameters
+    /// that make a degenerate set (a lattice whose generating vector shares a factor with `n`), an
+    /// input error for a table file of that `N` that cannot be read or holds other sets. Most
+    /// samplers have neither.
     fn check_parameters(&self, _n: usize) -> Result<()> {
         Ok(())
     }

@@ -782,8 +782,8 @@ fn image_value(img: &Image, nu1: f64, nu2: f64) -> f64 {
 }
 
 /// Reads a target image: a 2D npy array (`float64` or `float32`, row 0 at the lowest `ν2`) or an EXR
-/// image (channel `Y`, else `R`, else the first; top row at the highest `ν2`, as `anisospec spectrum`
-/// writes spectra). Every value must be finite and `≥ 0`.
+/// image (channel `Y`, else `R`, else its only one, several others being refused; top row at the
+/// highest `ν2`, as `anisospec spectrum` writes spectra). Every value must be finite and `≥ 0`.
 fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
     let bad = |why: String| {
         Error::Input(format!(

@@ -158,7 +158,8 @@ impl Variance {
         Ok(())
     }
 
-    /// The same target with every default written out (placements, weight and design), so that its
+    /// The same target with every default written out (placements, shear error, weight and
+    /// design), so that its
     /// `Debug` text, which keys compare's table cache, and its JSON name what was used.
     pub fn resolved(mut self) -> Self {
         self.placements = Some(self.placements());

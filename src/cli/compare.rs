@@ -9,7 +9,8 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct CompareArgs {
     /// A TOML study (keys as in the built-in default: --print-config prints them all). Every key is
-    /// optional: one left out takes the built-in default's value; an unknown key is refused. Without it the built-in default suite runs: a few minutes on 2 cores.
+    /// optional: one left out takes the built-in default's value; an unknown key is refused.
+    /// Without it the built-in default suite runs: a few minutes on 2 cores.
     #[arg(long, conflicts_with = "full")]
     pub config: Option<PathBuf>,
     /// Run the paper-scale preset instead of the default (N up to 4096, 1000 realizations; hours).

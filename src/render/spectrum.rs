@@ -8,8 +8,8 @@
 //! projection of a sampling spectrum in the variance formula of DESIGN §4.
 //!
 //! `g` is sampled at the cell centres `(j + ½)/K, (i + ½)/K` of a `K × K` grid and transformed with
-//! rustfft ([`sampled_power`]). The result is `|f̂(k1, k2)|²` with `f̂(k) ≈ (1/K²) Σ g e^{−2πi k·c}`, laid out like every
-//! spectrum of the project: `P[i·K + j]` at `k1 = j − K/2` (first projected dim), `k2 = i − K/2`.
+//! rustfft ([`sampled_power`]). The result is `|f̂(k1, k2)|²` with `f̂(k) ≈ (1/K²) Σ g e^{−2πi k·c}`,
+//! laid out like every spectrum of the project: `P[i·K + j]` at `k1 = j − K/2` (first projected dim), `k2 = i − K/2`.
 
 use crate::error::Result;
 use crate::integrands::sampled::sampled_power;

@@ -262,20 +262,21 @@ impl Variance {
                 (f, shear)
             })
             .collect();
-        // A family with nothing to move is its one integrand, whatever `placements` says, but still
-        // seen through each placement's shear.
+        // A family with nothing to move is its one integrand, whatever `placements` says: once when
+        // every placement sees it through the same shear, else through each placement's shear.
         let unplaced = placed.iter().any(|(f, _)| f.is_none());
-        let members: Vec<(&dyn Integrand, f64)> = if count == 0 {
-            vec![(base, self.shear)]
-        } else {
-            placed
-                .iter()
-                .map(|(f, shear)| match f {
-                    Some(f) if !unplaced => (f.as_ref(), *shear),
-                    _ => (base, *shear),
-                })
-                .collect()
-        };
+        let members: Vec<(&dyn Integrand, f64)> =
+            if count == 0 || (unplaced && self.shear_error() == 0.0) {
+                vec![(base, self.shear)]
+            } else {
+                placed
+                    .iter()
+                    .map(|(f, shear)| match f {
+                        Some(f) if !unplaced => (f.as_ref(), *shear),
+                        _ => (base, *shear),
+                    })
+                    .collect()
+            };
         let mut total = vec![0.0; res * res];
         for (f, shear) in &members {
             for (t, v) in total.iter_mut().zip(self.power(*f, *shear, res, m)) {

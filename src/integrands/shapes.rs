@@ -307,7 +307,7 @@ pub struct HalfPlane {
     kind: EdgeKind,
     normal: [f64; 2],
     c: f64,
-    poly: Vec<[f64; 2]>,
+    poly: polygon::Polygon,
 }
 
 impl HalfPlane {
@@ -372,15 +372,15 @@ impl Integrand for HalfPlane {
     }
     fn reference(&self) -> Reference {
         Reference {
-            value: polygon::area(&self.poly),
+            value: polygon::area(self.poly.vertices()),
             stderr: 0.0,
         }
     }
     fn fourier(&self, k: &[i64]) -> Option<Complex64> {
-        Some(polygon::fourier(&self.poly, k2(k)))
+        Some(polygon::fourier(self.poly.vertices(), k2(k)))
     }
     fn mean_square(&self) -> Option<f64> {
-        Some(polygon::area(&self.poly))
+        Some(polygon::area(self.poly.vertices()))
     }
     /// Offset `c` uniform over the range where the edge crosses the square.
     fn placed(&self, rng: &mut Rng) -> Option<Box<dyn Integrand>> {
@@ -531,7 +531,7 @@ impl Fan {
             .into_iter()
             .map(|(a, b, panels)| {
                 quad::integrate(fan_rule(), a, b, &[], panels, |s| {
-                    polygon::fourier(&polygon::clip_square([1.0, s], c), k)
+                    polygon::fourier(polygon::clip_square([1.0, s], c).vertices(), k)
                 })
             })
             .sum();
@@ -857,7 +857,7 @@ mod tests {
         // ∫f = mean over s of the step areas.
         let rule = quad::gauss_legendre(16);
         let mean_area: f64 = quad::integrate(&rule, 0.3, 0.7, &[fan.c, fan.c - 1.0], 8, |s| {
-            polygon::area(&polygon::clip_square([1.0, s], fan.c))
+            polygon::area(polygon::clip_square([1.0, s], fan.c).vertices())
         }) / 0.4;
         assert!((fan.reference().value - mean_area).abs() < 1e-14);
         assert!((grid_integral(&fan, 1000, |v| v) - mean_area).abs() < 2e-4);

@@ -100,10 +100,81 @@ pub fn write_group<T>(
             return Err(folder_in_the_way(out));
         }
     }
-    for (out, tmp) in written {
-        move_file(tmp, out)?;
-    }
+    commit(&written)?;
     Ok(value)
+}
+
+/// Moves each staged file `(output, staged)` onto its output, all or none: the outputs that exist are
+/// first renamed aside, into a temporary folder beside each (removed with it), then the new files go
+/// in. If a rename fails (an output that cannot be replaced: immutable, or another user's in a sticky
+/// folder), the new files placed so far are removed and the old ones renamed back, and the error says
+/// that nothing was written.
+fn commit(written: &[&(PathBuf, PathBuf)]) -> Result<()> {
+    // Refused by the file's or the folder's permissions: the user's to fix (exit 2), as a folder that
+    // takes no new file is before the work; anything else is a failure of the run.
+    let untouched = |out: &Path, e: std::io::Error| {
+        let text = format!(
+            "cannot replace {}: {e}; no output was written and the existing files are unchanged; make it replaceable (check its owner, the folder's sticky bit, chattr -i) or choose another output name",
+            out.display()
+        );
+        if e.kind() == std::io::ErrorKind::PermissionDenied {
+            Error::Usage(text)
+        } else {
+            Error::Io {
+                context: text,
+                source: e,
+            }
+        }
+    };
+    let restore = |set_aside: &[(&Path, PathBuf)]| {
+        for (out, old) in set_aside.iter().rev() {
+            // Best effort: a rename that just worked one way works back.
+            let _ = std::fs::rename(old, out);
+        }
+    };
+    let mut asides: Vec<(PathBuf, tempfile::TempDir)> = Vec::new();
+    let mut set_aside: Vec<(&Path, PathBuf)> = Vec::new();
+    for (out, _) in written {
+        if out.symlink_metadata().is_err() {
+            continue;
+        }
+        let dir = folder_of(out).to_path_buf();
+        let slot = match asides.iter().position(|(d, _)| *d == dir) {
+            Some(i) => i,
+            None => match staging_folder(&dir) {
+                Ok(tmp) => {
+                    asides.push((dir, tmp));
+                    asides.len() - 1
+                }
+                Err(e) => {
+                    restore(&set_aside);
+                    return Err(e);
+                }
+            },
+        };
+        let old = asides[slot]
+            .1
+            .path()
+            .join(out.file_name().expect("an output has a file name"));
+        if let Err(e) = std::fs::rename(out, &old) {
+            restore(&set_aside);
+            return Err(untouched(out, e));
+        }
+        set_aside.push((out, old));
+    }
+    for (i, (out, staged)) in written.iter().enumerate() {
+        if let Err(e) = move_file(staged, out) {
+            for (placed, _) in &written[..i] {
+                let _ = std::fs::remove_file(placed);
+            }
+            restore(&set_aside);
+            return Err(match e {
+                Error::Io { source, .. } => untouched(out, source),
+                other => other,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The file in a report folder that lists every file and subfolder the report wrote, one path per
@@ -730,6 +801,38 @@ mod tests {
 
     /// A folder whose writing fails keeps its old files and gets no new one, and goes if the call
     /// created it; one that succeeds gets every file, subfolders merged.
+    #[test]
+    fn a_commit_that_fails_midway_restores_every_output() {
+        // The second staged file is missing, so its move fails after the first output was replaced
+        // (as a rename onto an immutable file would): both outputs must end as they were.
+        let dir = tempfile::tempdir().unwrap();
+        let stage = tempfile::tempdir().unwrap();
+        let (a, b, c) = (
+            dir.path().join("a.csv"),
+            dir.path().join("b.csv"),
+            dir.path().join("c.csv"),
+        );
+        std::fs::write(&a, "old a").unwrap();
+        std::fs::write(&b, "old b").unwrap();
+        let (sa, sb, sc) = (
+            stage.path().join("a.csv"),
+            stage.path().join("b.csv"),
+            stage.path().join("c.csv"),
+        );
+        std::fs::write(&sa, "new a").unwrap();
+        std::fs::write(&sc, "new c").unwrap();
+        let (wa, wc, wb) = ((a.clone(), sa), (c.clone(), sc), (b.clone(), sb));
+        let e = commit(&[&wa, &wc, &wb]).unwrap_err().to_string();
+        assert!(e.contains("no output was written"), "{e}");
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "old a");
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "old b");
+        assert!(
+            !c.exists(),
+            "a new output placed before the failure is removed"
+        );
+        assert!(leftovers(dir.path()).is_empty());
+    }
+
     #[test]
     fn a_failed_folder_writes_nothing() {
         let dir = tempfile::tempdir().unwrap();

@@ -259,13 +259,27 @@ fn parse_text(mut reader: impl BufRead, limit: usize) -> Result<PointSets> {
         if read == 0 {
             break;
         }
+        let text = String::from_utf8_lossy(&raw);
+        // A carriage return inside a line: the file ends its lines with CR alone (classic Mac OS),
+        // and read by \n it would run its points together. CR LF endings are trimmed below.
+        if text.trim_end().contains('\r') {
+            return Err(Error::Input(format!(
+                "line {} holds a carriage return inside the line: the file ends its lines with CR alone; convert them to LF (e.g. tr '\\r' '\\n' < in.txt > out.txt)",
+                line_no + 1
+            )));
+        }
         if raw.len() as u64 > MAX_LINE_BYTES {
             return Err(Error::Input(format!(
                 "line {} is longer than {MAX_LINE_BYTES} bytes; each line holds one point's coordinates",
                 line_no + 1
             )));
         }
-        let text = String::from_utf8_lossy(&raw);
+        // A byte-order mark before the first line (some editors write one) is not part of a number.
+        let text = if line_no == 0 {
+            text.strip_prefix('\u{feff}').unwrap_or(&text)
+        } else {
+            &text
+        };
         let line = text.trim();
         if line.is_empty() {
             continue;
@@ -457,6 +471,12 @@ mod tests {
         assert!(parse("0.1 abc\n").is_err());
         assert!(parse("\n\n").is_err());
         assert!(parse("0.1 0.2\n#\n0.3 0.4\n0.5 0.6\n").is_err());
+        // Lines ended by CR alone would run together into one point of twice the dimensions.
+        let e = parse("0.1 0.2\r0.3 0.4\r").unwrap_err().to_string();
+        assert!(e.contains("line 1") && e.contains("CR alone"), "{e}");
+        // CR LF endings and a byte-order mark are read as plain text.
+        let p = parse("\u{feff}0.1 0.2\r\n0.3 0.4\r\n").unwrap();
+        assert_eq!((p.sets(), p.n(), p.dims()), (1, 2, 2));
     }
 
     #[test]

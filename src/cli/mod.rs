@@ -158,10 +158,18 @@ pub fn require_extension(path: &Path, flag: &str, ext: &str, what: &str) -> Resu
 /// `out/oracle.exr` and `out/oracle.npy`). `output` may carry one of `exts`, in any case, or no
 /// extension; the file of its own extension is `output` exactly as given (`-o out/o.NPY` writes
 /// `out/o.NPY` and `out/o.exr`, as every command writes at the path it is given). A path with no file
-/// name, or with another extension (which would not be written), is a usage error naming the files
-/// and the fix.
+/// name (`out/`, a folder; `out/.npy`, an extension alone), or with another extension (which would not
+/// be written), is a usage error naming the files and the fix.
 pub fn sibling_outputs(output: &Path, exts: &[&str]) -> Result<Vec<PathBuf>> {
-    if output.file_name().is_none() {
+    // `out/` names a folder (its file_name would be `out`, written beside it as `out.npy`), and
+    // `out/.npy` only an extension (written as hidden `.npy.npy` files).
+    let text = output.as_os_str().to_string_lossy();
+    let name = output.file_name().map(|n| n.to_string_lossy());
+    let bare_extension = name
+        .as_deref()
+        .and_then(|n| n.strip_prefix('.'))
+        .is_some_and(|rest| exts.contains(&rest));
+    if name.is_none() || text.ends_with(std::path::is_separator) || bare_extension {
         return Err(Error::Usage(format!(
             "-o {} has no usable file name; give a path such as out/image.{}",
             output.display(),
@@ -261,5 +269,24 @@ mod tests {
         ] {
             assert!(text.contains("at most 2^28 "), "{text}");
         }
+    }
+
+    #[test]
+    fn sibling_outputs_need_a_file_name() {
+        use std::path::Path;
+        let exts = ["exr", "npy"];
+        // A folder (written beside it as out.exr) or an extension alone (hidden .npy.exr files).
+        for bad in ["out/", "out//", "out/.npy", ".exr", "/"] {
+            let e = super::sibling_outputs(Path::new(bad), &exts).unwrap_err();
+            assert!(e.to_string().contains("no usable file name"), "{bad}: {e}");
+            assert_eq!(e.exit_code(), 2);
+        }
+        let files = super::sibling_outputs(Path::new("out/o.npy"), &exts).unwrap();
+        assert_eq!(files, [Path::new("out/o.exr"), Path::new("out/o.npy")]);
+        let files = super::sibling_outputs(Path::new("out/.hidden"), &exts).unwrap();
+        assert_eq!(
+            files,
+            [Path::new("out/.hidden.exr"), Path::new("out/.hidden.npy")]
+        );
     }
 }

@@ -783,11 +783,12 @@ fn image_value(img: &Image, nu1: f64, nu2: f64) -> f64 {
 
 /// Reads a target image: a 2D npy array (`float64` or `float32`, row 0 at the lowest `ν2`) or an EXR
 /// image (channel `Y`, else `R`, else its only one, several others being refused; top row at the
-/// highest `ν2`, as `anisospec spectrum` writes spectra). Every value must be finite and `≥ 0`.
+/// highest `ν2`, as `anisospec spectrum` writes spectra). Every value must be finite, `≥ 0` and at most
+/// 2^27 (no set of points has a larger `P`).
 fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
     let bad = |why: String| {
         Error::Input(format!(
-            "{}: not a usable target image ({why}); give a 2D float64 or float32 npy array, or an EXR image (its Y channel, else R, else its only channel), of values >= 0",
+            "{}: not a usable target image ({why}); give a 2D float64 or float32 npy array, or an EXR image (its Y channel, else R, else its only channel), of values >= 0 (about 1 where the spectrum is flat)",
             path.display()
         ))
     };
@@ -812,10 +813,13 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
     if rows == 0 || cols == 0 {
         return Err(bad("it is empty".into()));
     }
+    // P = |F|²/N never exceeds N, and a 2D set holds at most 2^27 points: a larger value is out of
+    // any set's reach (and its squared error in the loss could overflow).
+    let largest = (crate::points::MAX_COORDINATES / 2) as f64;
     if let Some((at, v)) = pixels
         .iter()
         .enumerate()
-        .find(|(_, v)| !v.is_finite() || **v < 0.0)
+        .find(|(_, v)| !v.is_finite() || **v < 0.0 || **v > largest)
     {
         // Named as the file holds it: an EXR's rows count from the top, an npy's from row 0.
         let (row, col) = (at / cols, at % cols);
@@ -827,7 +831,15 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
         } else {
             format!("the value at [{row}, {col}]")
         };
-        return Err(bad(format!("{place} is {}", number(*v))));
+        let why = if *v > largest {
+            format!(
+                ", above 2^27 = {}: a spectrum P = |F|²/N is at most N, a 2D set holds at most 2^27 points, and P averages about 1 at high frequencies",
+                number(largest)
+            )
+        } else {
+            String::new()
+        };
+        return Err(bad(format!("{place} is {}{why}", number(*v))));
     }
     Ok((pixels, [rows, cols]))
 }
@@ -867,6 +879,17 @@ mod tests {
         crate::output::image::write_exr(&two, 3, 4, &[("A", f32s.clone()), ("B", f32s)]).unwrap();
         let e = read_image(&two).unwrap_err().to_string();
         assert!(e.contains("channels A, B and none named Y or R"), "{e}");
+        // Beyond any set's reach (3e38 stuck the loss at 3e78; 1e300 made it inf): refused.
+        values[3 + 2] = 3e38;
+        crate::output::write_npy(&npy, &[4, 3], &values).unwrap();
+        let e = read_image(&npy).unwrap_err().to_string();
+        assert!(
+            e.contains("the value at [1, 2] is 3e38, above 2^27 = 134217728:"),
+            "{e}"
+        );
+        values[3 + 2] = (1u64 << 27) as f64;
+        crate::output::write_npy(&npy, &[4, 3], &values).unwrap();
+        assert!(read_image(&npy).is_ok());
     }
 
     #[test]

@@ -311,6 +311,19 @@ fn target_files_are_strict() {
             "{text:?}: {e}"
         );
     }
+    // Below N = 4 no blue-noise disc fits: one that darkens a cell darkens the 4 at |k| = 1, more than
+    // N points can. Every radius is refused by the same message (radius 0.5 said "raise radius",
+    // 0.75 "lower radius").
+    for radius in ["0.5", "0.75", "2"] {
+        let t = Target::parse(&format!("kind = \"blue-noise\"\nradius = {radius}\n")).unwrap();
+        for n in [2, 3] {
+            let e = t.grid(n).unwrap_err().to_string();
+            assert!(e.contains(&format!("N = {n} is too small")), "{e}");
+        }
+        t.grid(4).map(drop).unwrap_or_else(|e| {
+            assert!(!e.to_string().contains("too small"), "{e}");
+        });
+    }
     // Beyond reach: a blue-noise disc of radius 1 darkens about pi N cells. At N = 256 its dark
     // cells are the lattice points 0 < |k| < r = radius sqrt(N) = 16, so the reachable fraction is
     // N / (G(r) - 1), G(r) the number of lattice points in the open disc of radius r.

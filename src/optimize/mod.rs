@@ -199,6 +199,7 @@ impl Setup {
                     "the 4D strata term (a blue-noise disc of radius --strat-radius {} on xy and uv): {}; or drop the term with --strat-weight 0",
                     crate::error::number(self.strata.radius),
                     m.replace("lower radius", "lower --strat-radius")
+                        .replace("raise radius", "raise --strat-radius")
                 )),
                 other => other,
             })

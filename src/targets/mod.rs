@@ -578,6 +578,14 @@ impl Target {
                 "-n {n}: an optimized set needs at least 2 points"
             )));
         }
+        // A dark disc is symmetric: the smallest that holds a cell holds the four at |k| = 1, so no
+        // radius suits fewer points than that (a smaller one darkens nothing, a larger one too much).
+        if matches!(self, Target::BlueNoise(_)) && REACH * (n as f64) < 4.0 {
+            return Err(Error::Input(format!(
+                "N = {n} is too small for a blue-noise target: its smallest dark disc holds the 4 frequency cells at |k| = 1, and {n} points can darken only about {}; use N >= 4",
+                number(REACH * n as f64)
+            )));
+        }
         // Refuse hopeless targets before laying out a grid that may not fit in memory.
         let estimate = self.dark_area() * n as f64;
         if estimate > 4.0 * REACH * n as f64 {

@@ -2793,6 +2793,23 @@ fn negative_reals_reach_their_flags_check() {
         ];
         rejects(&args, message, &out);
     }
+    // Too wide a repulsion weighs every pair of points (1e9 took 70 times as long): refused.
+    let args = [
+        "optimize",
+        "--target",
+        "targets/blue-noise.toml",
+        "-n",
+        "16",
+        "--repulsion-radius",
+        "1e9",
+        "-o",
+        o,
+    ];
+    rejects(
+        &args,
+        "--repulsion-radius 1000000000: give at most 4 mean",
+        &out,
+    );
 }
 
 /// A 2D table has no xy and uv strata: `--strat-radius` and `--strat-weight` are refused by name there,

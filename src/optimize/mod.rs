@@ -102,6 +102,9 @@ pub const MAX_WEIGHT: f64 = 1e6;
 /// unchanged (0.011, 0.005).
 pub const DEFAULT_ANNULAR_WEIGHT: f64 = 100.0;
 
+/// Largest repulsion radius, in mean spacings `1/sqrt(N)`: about 50 neighbours per point.
+pub const MAX_REPULSION_RADIUS: f64 = 4.0;
+
 impl Setup {
     /// The objective: the target on `xy` (2D) or on `xu` and `yv` plus the strata on `xy` and `uv`
     /// (4D). Fails for bad dims, N, or a target out of reach.
@@ -119,6 +122,12 @@ impl Setup {
                     crate::error::number(v)
                 )));
             }
+        }
+        if self.repulsion.radius > MAX_REPULSION_RADIUS {
+            return Err(Error::Usage(format!(
+                "--repulsion-radius {}: give at most {MAX_REPULSION_RADIUS} mean spacings (the repulsion keeps neighbours apart; a wider one weighs every pair of points, and 1e9 took 70 times as long)",
+                crate::error::number(self.repulsion.radius)
+            )));
         }
         for (name, v) in [
             ("--repulsion-weight", self.repulsion.weight),

@@ -586,12 +586,16 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> 
     })
 }
 
+/// Longest file or folder name, in bytes, that common file systems take (ext4, XFS, APFS, NTFS).
+const MAX_NAME_BYTES: usize = 255;
+
 /// Checks, before any work, that a command's output files can be written without harm: no output is
 /// one of the `inputs` (point files, tables, targets, scenes: outputs never clobber inputs), no two
 /// outputs are the same file, no output is a folder, and each output's folder exists (no file stands
 /// where it must go, and a missing one is not made: a typo in a path should not grow folders) and
-/// takes a new file (probed with a temporary file, removed at once). A usage error names the clash, or
-/// the folder and the operating system's reason, and the fix.
+/// takes a new file (probed with a temporary file, removed at once), and no name in the path is longer
+/// than file systems take. A usage error names the clash, or the folder and the operating system's
+/// reason, and the fix.
 pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<()> {
     let mut probed: Vec<&Path> = Vec::new();
     for (i, out) in outputs.iter().enumerate() {
@@ -612,6 +616,17 @@ pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<()> {
         if out.is_dir() {
             return Err(Error::Usage(format!(
                 "the output {} is a folder; give a file name",
+                out.display()
+            )));
+        }
+        // Most file systems refuse a longer name, and only at the end of the work.
+        if let Some(long) = out
+            .components()
+            .map(|c| c.as_os_str().len())
+            .find(|&len| len > MAX_NAME_BYTES)
+        {
+            return Err(Error::Usage(format!(
+                "the output {} has a name of {long} bytes, more than the {MAX_NAME_BYTES} a file system allows; choose a shorter name",
                 out.display()
             )));
         }
@@ -831,6 +846,18 @@ mod tests {
             "a new output placed before the failure is removed"
         );
         assert!(leftovers(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn a_name_too_long_for_the_file_system_is_refused_before_the_work() {
+        let dir = tempfile::tempdir().unwrap();
+        let long = dir.path().join(format!("{}.npy", "a".repeat(252)));
+        let e = check_outputs(&[&long], &[]).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("a name of 256 bytes"), "{e}");
+        let fits = dir.path().join(format!("{}.npy", "a".repeat(251)));
+        check_outputs(&[&fits], &[]).unwrap();
+        std::fs::write(&fits, "").unwrap();
     }
 
     #[test]

@@ -107,11 +107,10 @@ impl SceneConfig {
     /// Reads a TOML scene file; a syntax error, an unknown key or a value out of range is
     /// [`Error::Input`] naming the file and the key.
     pub fn from_file(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            Error::Input(format!(
-                "cannot read the scene file {}: {e}",
-                path.display()
-            ))
+        let text = std::fs::read_to_string(path).map_err(|e| match Error::read_input(path, e) {
+            // Every reason to refuse the file (missing, forbidden, a folder, not UTF-8) with its fix.
+            Error::Input(m) => Error::Input(format!("{m} (a TOML scene file)")),
+            other => other,
         })?;
         let config: SceneConfig = toml::from_str(&text).map_err(|e| {
             // toml's Display quotes the offending line (so the key) with a caret under the value.

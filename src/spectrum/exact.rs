@@ -28,19 +28,32 @@ fn phases(c: f64, res: usize) -> Vec<Complex64> {
     (0..res as i64).map(|j| phase(j - half, c)).collect()
 }
 
+/// Bytes of phase tables held at once by [`fourier_sums`] (`32 K` per point): the points go through
+/// in blocks of `PHASE_BYTES / (32 K)`, so memory stays `O(K²)` whatever `N`.
+const PHASE_BYTES: usize = 8 << 20;
+
 /// `F(k) = Σ_j exp(−2πi (k1 x_j + k2 y_j))` on the `res × res` grid (layout: see [`crate::spectrum`]).
+/// Each bin adds its terms in point order, block after block, so the bits do not depend on the block
+/// size or the thread count.
 pub fn fourier_sums(points: &[[f64; 2]], res: usize) -> Vec<Complex64> {
-    let e1: Vec<Vec<Complex64>> = points.par_iter().map(|p| phases(p[0], res)).collect();
-    let e2: Vec<Vec<Complex64>> = points.par_iter().map(|p| phases(p[1], res)).collect();
+    fourier_sums_in_blocks(points, res, (PHASE_BYTES / (32 * res.max(1))).max(1))
+}
+
+/// [`fourier_sums`] with the points taken `block` at a time.
+fn fourier_sums_in_blocks(points: &[[f64; 2]], res: usize, block: usize) -> Vec<Complex64> {
     let mut out = vec![Complex64::new(0.0, 0.0); res * res];
-    out.par_chunks_mut(res).enumerate().for_each(|(i, row)| {
-        for (a, b) in e1.iter().zip(&e2) {
-            let w = b[i];
-            for (r, x) in row.iter_mut().zip(a) {
-                *r += w * x;
+    for chunk in points.chunks(block) {
+        let e1: Vec<Vec<Complex64>> = chunk.par_iter().map(|p| phases(p[0], res)).collect();
+        let e2: Vec<Vec<Complex64>> = chunk.par_iter().map(|p| phases(p[1], res)).collect();
+        out.par_chunks_mut(res).enumerate().for_each(|(i, row)| {
+            for (a, b) in e1.iter().zip(&e2) {
+                let w = b[i];
+                for (r, x) in row.iter_mut().zip(a) {
+                    *r += w * x;
+                }
             }
-        }
-    });
+        });
+    }
     out
 }
 
@@ -70,4 +83,29 @@ pub fn type2(coeffs: &[Complex64], points: &[[f64; 2]], res: usize) -> Vec<Compl
                 .sum()
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blocks_of_points_keep_the_bits() {
+        let points: Vec<[f64; 2]> = (0..37)
+            .map(|j| {
+                [
+                    (j as f64 * 0.618_034).fract(),
+                    (j as f64 * 0.414_214).fract(),
+                ]
+            })
+            .collect();
+        let whole = fourier_sums_in_blocks(&points, 16, points.len());
+        for block in [1, 5, 36] {
+            assert_eq!(
+                fourier_sums_in_blocks(&points, 16, block),
+                whole,
+                "block {block}"
+            );
+        }
+    }
 }

@@ -24,7 +24,8 @@ pub struct AnalyticEntry {
     pub label: String,
     /// Integrand spec (see `anisospec integrands`), 4D, e.g. `sheared:s=0.5@xu*sheared:s=0.5@yv`.
     pub spec: String,
-    /// The shear `(sx, sy)` an exact oracle gives for it (the centre of its shear range for a fan).
+    /// The shear `(sx, sy)` an exact oracle gives for it (the centre of its shear range for a fan;
+    /// with tables listed, `[c, c]` for the range's centre `c`, unless the range holds 0).
     pub shear: [f64; 2],
     /// The range of shears it holds, `[s_min, s_max]` (equal for a single edge); a double-wedge table
     /// is built for this range.
@@ -343,6 +344,20 @@ impl CompareConfig {
                     number(e.shear_range[1])
                 )));
             }
+            // A table is designed around the range's centre (its frame shear) and moved by `shear`:
+            // any other shear would put its wedge or hairline elsewhere than the integrand's.
+            let centre = super::tables::frame_shear((e.shear_range[0], e.shear_range[1]));
+            if !self.tables.is_empty() && centre != 0.0 && e.shear != [centre, centre] {
+                return Err(Error::Usage(format!(
+                    "{}: shear = [{}, {}] with shear_range [{}, {}]: the tables are designed around the range's centre and moved by the shear, so give shear = [{c}, {c}] (or list no tables)",
+                    e.label,
+                    number(e.shear[0]),
+                    number(e.shear[1]),
+                    number(e.shear_range[0]),
+                    number(e.shear_range[1]),
+                    c = number(centre)
+                )));
+            }
             if crate::integrands::spec::names_a_pixel(&e.spec) {
                 return Err(Error::Usage(format!(
                     "{}: spec '{}' is a pixel of the scene, not an analytic integrand (whose integral is exact); list pixels by their oracle class instead, e.g. pixel_classes = [\"hairline\"], which also sets their shears and references",
@@ -598,6 +613,15 @@ mod tests {
             m.contains("shear = [1e300, 0.5]: shears must be finite"),
             "{m}"
         );
+        // A table built around 0.5 and moved by 0.4 would miss the fan's upper 0.1 (code review).
+        let m = refused(|c| c.analytic[1].shear = [0.4, 0.4]);
+        assert!(
+            m.contains("shear = [0.4, 0.4] with shear_range [0.3, 0.7]")
+                && m.contains("give shear = [0.5, 0.5]"),
+            "{m}"
+        );
+        let m = refused(|c| c.analytic[0].shear = [0.5, 0.3]);
+        assert!(m.contains("give shear = [0.5, 0.5]"), "{m}");
         let m = refused(|c| c.analytic[0].shear_range = [0.7, 1e-300]);
         assert!(
             m.contains("shear_range [0.7, 1e-300] has s_min > s_max"),

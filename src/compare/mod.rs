@@ -188,7 +188,8 @@ pub struct Outcome {
     pub studies: Vec<Study>,
     /// Robustness rows.
     pub robustness: Vec<Robustness>,
-    /// Wall time of the whole run, seconds.
+    /// Wall time of the measurements (the studies and the robustness sweep, with the tables they
+    /// build), seconds; the report adds its spectra gallery and plots to it.
     pub seconds: f64,
 }
 
@@ -334,7 +335,7 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
     };
     // The whole folder or nothing: a failure while writing it leaves an earlier report as it was.
     crate::output::write_folder(out, REPORT_MARKER, |staging| {
-        report::write(&outcome, &specs, &tables, staging)
+        report::write(&outcome, &specs, &tables, staging, started)
     })?;
     Ok(outcome)
 }

@@ -42,12 +42,14 @@ pub fn slug(label: &str) -> String {
         .join("_")
 }
 
-/// Writes the whole report under `out`.
+/// Writes the whole report under `out`; `started` is when the run began (the report states the time
+/// of the whole run, its spectra gallery included).
 pub fn write(
     outcome: &Outcome,
     specs: &[SamplerSpec],
     tables: &TableCache,
     out: &Path,
+    started: std::time::Instant,
 ) -> Result<()> {
     write_numbers(outcome, specs, out)?;
     let mut plots = Vec::new();
@@ -85,7 +87,16 @@ pub fn write(
         }
     }
     let gallery = write_gallery(outcome, specs, tables, out)?;
-    write_markdown(outcome, specs, &plots, &robustness_plots, &gallery, out)
+    let whole_seconds = started.elapsed().as_secs_f64();
+    write_markdown(
+        outcome,
+        specs,
+        &plots,
+        &robustness_plots,
+        &gallery,
+        whole_seconds,
+        out,
+    )
 }
 
 /// Whether an MSE can be drawn on a log axis: finite and above 0.
@@ -420,6 +431,7 @@ fn write_markdown(
     plots: &[Option<(String, String)>],
     robustness_plots: &[(String, String)],
     gallery: &[(String, String)],
+    whole_seconds: f64,
     out: &Path,
 ) -> Result<()> {
     let c = &outcome.config;
@@ -435,8 +447,9 @@ fn write_markdown(
              exponent between the two largest N alone. \
              **Time** is the median time of one estimate on one thread (generating its set, then evaluating the \
              integrand), in milliseconds; **set-up** is the one-off optimization of the table for that N, in seconds. A sampler that \
-             cannot make an N uses its nearest valid N (shown). Seed {}; whole run {:.1} s.\n",
-            c.seed, outcome.seconds
+             cannot make an N uses its nearest valid N (shown). Seed {}; measurements {:.1} s, whole run {:.1} s \
+             (with the spectra gallery, whose tables at N = {} are built when missing, and the plots).\n",
+            c.seed, outcome.seconds, whole_seconds, c.spectra_n
         )?;
         write_summary(w, outcome)?;
         writeln!(w, "## Integrands\n")?;

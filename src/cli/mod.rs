@@ -21,9 +21,10 @@ use std::path::{Path, PathBuf};
 /// converge; render's `--shear` is the per-pixel oracle's instead).
 #[derive(Clone, Debug, clap::Args)]
 pub struct ShearArgs {
-    /// Shear the 4D sets by sx in xu and sy in yv (written sx,sy; negative ones as
-    /// --shear=-0.5,-0.5; each magnitude at most 1e6), aligning their spectra with a defocused
-    /// pixel's, e.g. the oracle's shear of the integrand.
+    /// Shear the 4D sets by sx in xu and sy in yv (written sx,sy, e.g. 0.5,0.5 or -0.5,-0.5; each
+    /// magnitude at most 1e6; in pixel widths per lens width, as the oracle gives it: x moves by
+    /// −sx·u), aligning their spectra with a defocused pixel's, e.g. the oracle's shear of the
+    /// integrand.
     #[arg(long, value_parser = parse_shear, allow_hyphen_values = true)]
     pub shear: Option<(f64, f64)>,
     /// How --shear is applied (needs --shear): transported (seam-free, exactly uniform on the square)

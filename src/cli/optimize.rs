@@ -48,7 +48,7 @@ pub struct OptimizeArgs {
     #[arg(short = 'o', long)]
     pub output: PathBuf,
     /// Draw the starting sets from this sampler (e.g. mj, jittered; see `anisospec samplers`)
-    /// instead of uniform random points. Stratified starts keep their dark axes.
+    /// instead of uniform random points (the default). Stratified starts keep their dark axes.
     #[arg(long)]
     pub init: Option<String>,
     /// Hold the first coordinate (2D) or x and y (4D) where --init put them, one point per interval
@@ -86,7 +86,8 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = DEFAULT_LIMITS.max_iters, value_parser = parse_iterations, allow_negative_numbers = true)]
     pub max_iters: u64,
     /// Largest wall time per set, in seconds, at most 1e9 (results depend on machine speed only if
-    /// this binds).
+    /// this binds). The sets run in parallel on the cores, so S sets on C cores may take up to about
+    /// S/C times this.
     #[arg(long, default_value_t = DEFAULT_LIMITS.max_seconds, allow_negative_numbers = true)]
     pub max_seconds: f64,
     /// Stop when a solver round lowers the loss by less than this fraction.

@@ -29,7 +29,7 @@ pub struct SpectrumArgs {
     /// Dimensions of the sampler's points (2 or 4).
     #[arg(long, default_value_t = 2)]
     pub dims: usize,
-    /// Points per set (with --sampler; N × D at most 2^28 coordinates).
+    /// Points per set: required with --sampler, no default (N × D at most 2^28 coordinates).
     #[arg(
         short = 'n',
         long = "n",
@@ -72,12 +72,14 @@ pub struct SpectrumArgs {
     pub stderr: Option<PathBuf>,
     /// Write the radial profile as CSV: r, r/sqrt(N), mean, stderr (empty from one realization),
     /// anisotropy (dB; empty where the annulus is dark or flat within the method's error) and, with
-    /// --cones, one column per directional cone; one row per annulus
-    /// r = 1 … K/2 − 1 (needs --res 4 or more).
+    /// --cones, one column per directional cone; one row per annulus r − ½ ≤ |k| < r + ½,
+    /// r = 1 … K/2 − 1 (needs --res 4 or more). The stderr combines the bins' standard errors as
+    /// independent, except k and −k, which are equal.
     #[arg(long)]
     pub radial: Option<PathBuf>,
-    /// Number of directional cones in the radial CSV (needs --radial; cone c is centred on angle
-    /// c·180°/M; cone 0 holds the k1 axis); at most 360.
+    /// Number of directional cones in the radial CSV (needs --radial; cone c covers the angles
+    /// [c − ½, c + ½)·180°/M, so cone 0 is centred on the k1 axis and a k on an edge goes to the
+    /// next cone up); at most 360.
     #[arg(long, default_value_t = 0, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub cones: usize,
 }

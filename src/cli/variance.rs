@@ -47,13 +47,14 @@ pub struct VarianceArgs {
     pub res: usize,
     /// Grow the grid with N: K = max(--res, M·N), with K² times the integrand's planes at most 8192².
     /// Discontinuous integrands under stratified samplers need K of a few N for an accurate sum; cheap
-    /// for edges aligned with an axis.
+    /// for edges aligned with an axis. Off by default (K = --res at every N).
     #[arg(long, value_name = "M")]
     pub res_per_n: Option<usize>,
     /// Realizations of the sampler averaged for E[P_N(k)]; 2 to 1000000.
     #[arg(long, default_value_t = 100, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub realizations: usize,
-    /// Number of directional cones (cone c centred on c·180°/M; cone 0 holds the k1 axis); 1 to 360.
+    /// Number of directional cones (cone c covers the angles [c − ½, c + ½)·180°/M: cone 0 is centred
+    /// on the k1 axis, and a k on an edge goes to the next cone up); 1 to 360.
     /// The printed table gives each cone's share, in %, of the sum over the grid; the tail beyond
     /// the grid is not split by cone. With --shear the directions are the unsheared pattern's: an
     /// edge the shear matches lies on its k1 axis, in cone 0.

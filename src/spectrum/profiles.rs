@@ -36,7 +36,8 @@ pub fn check_cones(cones: usize) -> Result<()> {
 
 /// The directional cone of a frequency among `cones` sectors of the folded angle
 /// `θ = atan2(k2, k1) mod π`. Cone `c` is centred on `θ = c π / cones`, so cone 0 holds the `k1` axis and,
-/// for an even count, cone `cones / 2` holds the `k2` axis. `k = 0` is put in cone 0.
+/// for an even count, cone `cones / 2` holds the `k2` axis. Cones are half-open, `[c − ½, c + ½)` in
+/// units of `π / cones`: a frequency on an edge goes to the cone above it. `k = 0` is put in cone 0.
 pub fn cone_index(k1: i64, k2: i64, cones: usize) -> usize {
     let theta = (k2 as f64).atan2(k1 as f64).rem_euclid(PI);
     let width = PI / cones as f64;

@@ -457,6 +457,19 @@ fn degenerate_starts_end_in_a_finite_report() {
         if name != "one cell" {
             assert!(rep.separated > 0, "{name}: duplicates not separated");
         }
+        // The log starts at the starting set and ends at the iterations done, its best loss never
+        // rising.
+        let (first, last) = (&rep.log[0], rep.log.last().unwrap());
+        assert_eq!(
+            (first.iter, first.loss, first.solver),
+            (0, rep.initial_loss, "start")
+        );
+        assert_eq!(last.iter, rep.iterations, "{name}");
+        assert_eq!(last.loss, rep.loss, "{name}");
+        assert!(rep
+            .log
+            .windows(2)
+            .all(|w| w[1].loss <= w[0].loss && w[1].iter > w[0].iter));
     }
 }
 

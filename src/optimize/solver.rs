@@ -50,13 +50,13 @@ impl Default for Limits {
 /// One line of the optimization log.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct LogRow {
-    /// Iteration count since the start (all rounds).
+    /// Iterations done since the start (all rounds): 0 on the first row, the starting set.
     pub iter: u64,
     /// Seconds since the start.
     pub seconds: f64,
     /// Best loss so far.
     pub loss: f64,
-    /// `lbfgs` or `steepest-descent`.
+    /// `start` (the first row), then `lbfgs` or `steepest-descent`.
     pub solver: &'static str,
 }
 
@@ -175,7 +175,9 @@ struct Recorder {
 impl<I: State<Float = f64>> Observe<I> for Recorder {
     fn observe_iter(&mut self, state: &I, _kv: &KV) -> Result<(), ArgminError> {
         self.rows.lock().expect("log lock").push(LogRow {
-            iter: self.offset + state.get_iter(),
+            // argmin counts the iteration after observing it: this row follows iteration
+            // `get_iter() + 1` of the round.
+            iter: self.offset + state.get_iter() + 1,
             seconds: self.start.elapsed().as_secs_f64(),
             loss: state.get_best_cost(),
             solver: self.solver,
@@ -287,6 +289,12 @@ pub fn minimize(
     let rows = Arc::new(Mutex::new(Vec::new()));
     let objective = &Variables { objective, frozen };
     let initial = objective.evaluate(start);
+    rows.lock().expect("log lock").push(LogRow {
+        iter: 0,
+        seconds: t0.elapsed().as_secs_f64(),
+        loss: initial.loss,
+        solver: "start",
+    });
     let mut best = (start.to_vec(), initial.clone());
     let mut iterations = 0u64;
     let counter = Arc::new(AtomicU64::new(1));

@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::points::Projection;
-use crate::render::spectrum::{slice_spectrum, spectrum_png_pixels};
+use crate::render::spectrum::{slice_spectrum, spectrum_png_pixels, SPECTRUM_PNG_KEY};
 use crate::render::{PixelIntegrand, Scene};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -97,10 +97,14 @@ pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
     crate::output::write_group(&[npy, exr, png], |staged| {
         crate::output::write_npy(&staged(npy), &[k, k], &p)?;
         crate::output::image::write_spectrum_exr(&staged(exr), &p, k)?;
-        crate::output::image::write_png(&staged(png), side, side, 1, &pixels)
+        let key = format!(
+            "Slice spectrum of pixel ({px}, {py}) in {}, K = {k}: {SPECTRUM_PNG_KEY}",
+            proj.name()
+        );
+        crate::output::image::write_png_described(&staged(png), [side, side], 1, &pixels, Some(key))
     })?;
     println!(
-        "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {}, {} and {}",
+        "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {}, {} and {} (the PNG: {SPECTRUM_PNG_KEY})",
         proj.name(),
         npy.display(),
         exr.display(),

@@ -201,8 +201,13 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
         }
         Ok(())
     })?;
+    let png_key = if kinds.contains(&ImageKind::Png) {
+        format!(" (PNG: {})", crate::output::image::spectrum_png_key())
+    } else {
+        String::new()
+    };
     eprintln!(
-        "spectrum of {} of {} on a {}x{} grid written to {}",
+        "spectrum of {} of {} on a {}x{} grid written to {}{png_key}",
         super::counted(spec.realizations, "realization"),
         super::counted(spec.n, "point"),
         spec.res,

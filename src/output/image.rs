@@ -73,6 +73,18 @@ pub fn write_png(
     channels: usize,
     pixels: &[u8],
 ) -> Result<()> {
+    write_png_described(path, [width, height], channels, pixels, None)
+}
+
+/// [`write_png`] with an ASCII `description` stored in the file (a `tEXt` chunk, keyword
+/// `Description`, which image viewers show among the file's properties).
+pub fn write_png_described(
+    path: &Path,
+    [width, height]: [usize; 2],
+    channels: usize,
+    pixels: &[u8],
+    description: Option<String>,
+) -> Result<()> {
     let colour = if channels == 3 {
         png::ColorType::Rgb
     } else {
@@ -82,6 +94,10 @@ pub fn write_png(
         let mut enc = png::Encoder::new(w, width as u32, height as u32);
         enc.set_color(colour);
         enc.set_depth(png::BitDepth::Eight);
+        if let Some(text) = description {
+            enc.add_text_chunk("Description".into(), text)
+                .map_err(std::io::Error::other)?;
+        }
         let mut writer = enc.write_header().map_err(std::io::Error::other)?;
         writer
             .write_image_data(pixels)
@@ -113,15 +129,29 @@ pub fn tone_map_log(p: f64) -> u8 {
 /// Smallest side of a point set's spectrum PNG; smaller grids are scaled up by an integer factor.
 pub const SPECTRUM_PNG_MIN_SIDE: usize = 256;
 
+/// How a spectrum PNG reads: the tone map of [`tone_map_log`] and the frequency layout (ASCII).
+pub fn spectrum_png_key() -> String {
+    format!(
+        "log10 P from {} (black) to {} (white); P = 1 (white noise) mid-grey; k1 right, k2 up, k = 0 at the centre",
+        LOG_RANGE.0, LOG_RANGE.1
+    )
+}
+
 /// Writes a spectrum as PNG (log tone map, largest `k2` on top), scaled up by the smallest integer
-/// factor that makes it at least [`SPECTRUM_PNG_MIN_SIDE`] pixels (`--res 100`: 300 pixels).
+/// factor that makes it at least [`SPECTRUM_PNG_MIN_SIDE`] pixels (`--res 100`: 300 pixels), with
+/// [`spectrum_png_key`] and `K` stored in the file as its description.
 pub fn write_spectrum_png(path: &Path, values: &[f64], res: usize) -> Result<()> {
     let grey: Vec<u8> = spectrum_image_rows(values, res)
         .into_iter()
         .map(tone_map_log)
         .collect();
     let (side, pixels) = upscaled(&grey, res, SPECTRUM_PNG_MIN_SIDE);
-    write_png(path, side, side, 1, &pixels)
+    let scale = side / res;
+    let key = format!(
+        "Power spectrum, K = {res} frequencies per side, {scale} x {scale} pixels each: {}",
+        spectrum_png_key()
+    );
+    write_png_described(path, [side, side], 1, &pixels, Some(key))
 }
 
 /// A square `res × res` grey image scaled up by the smallest integer factor that makes its side at
@@ -142,4 +172,27 @@ pub fn write_spectrum_exr(path: &Path, values: &[f64], res: usize) -> Result<()>
         .map(|&v| v as f32)
         .collect();
     write_exr(path, res, res, &[("Y", rows)])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_spectrum_png_says_how_it_reads() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.png");
+        write_spectrum_png(&path, &[1.0; 16], 4).unwrap();
+        let file = std::io::BufReader::new(std::fs::File::open(&path).unwrap());
+        let reader = png::Decoder::new(file).read_info().unwrap();
+        let info = reader.info();
+        assert_eq!((info.width, info.height), (256, 256));
+        let text = &info.uncompressed_latin1_text;
+        assert_eq!(text.len(), 1);
+        assert_eq!(text[0].keyword, "Description");
+        assert!(text[0]
+            .text
+            .starts_with("Power spectrum, K = 4 frequencies per side, 64 x 64"));
+        assert!(text[0].text.ends_with(&spectrum_png_key()));
+    }
 }

@@ -1,7 +1,7 @@
 //! Contact sheets: several spectra side by side in one labelled PNG, tone-mapped like
 //! [`super::image::write_spectrum_png`] (log10 P over [`super::image::LOG_RANGE`], larger `k2` on top).
 
-use super::image::{spectrum_image_rows, tone_map_log, write_png, LOG_RANGE};
+use super::image::{spectrum_image_rows, tone_map_log, write_png};
 use super::plot::{draw_text, short_numbers, wrap};
 use crate::error::{Error, Result};
 use plotters::prelude::*;
@@ -47,14 +47,7 @@ pub fn write_sheet(path: &Path, title: &str, panels: &[Panel], columns: usize) -
     let width = GAP + columns * (PANEL + GAP);
     let text_width = (width - 2 * GAP) as u32;
     let title = wrap(&short_numbers(title), 20, text_width);
-    let footer = wrap(
-        &format!(
-            "log10 P from {} (black) to {} (white); P = 1 (white noise) mid-grey; k1 right, k2 up, k = 0 at the centre",
-            LOG_RANGE.0, LOG_RANGE.1
-        ),
-        12,
-        text_width,
-    );
+    let footer = wrap(&super::image::spectrum_png_key(), 12, text_width);
     let top = TITLE + TITLE_LINE * (title.len() - 1);
     let footer_height = CAPTION + FOOTER_LINE * (footer.len() - 1);
     let height = top + rows * (PANEL + CAPTION + GAP) + footer_height;

@@ -51,6 +51,9 @@ where
 /// Smallest side of the PNG view; smaller grids are scaled up by an integer factor (nearest).
 pub const PNG_MIN_SIDE: usize = 512;
 
+/// How the PNG view of [`spectrum_png_pixels`] reads (ASCII).
+pub const SPECTRUM_PNG_KEY: &str = "log10(P / max P) from -6 (black) to 0 (white), the max taken over k != 0; k1 right, k2 up, k = 0 at the centre";
+
 /// The PNG view of an integrand spectrum: `log10(P / max_{k≠0} P)` mapped from `[−6, 0]` to 0..255,
 /// largest `k2` on top, scaled up by an integer factor to at least [`PNG_MIN_SIDE`] pixels; the DC bin
 /// (the squared mean) is left out of the maximum. Returns the side and the grey pixels.

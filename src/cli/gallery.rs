@@ -134,17 +134,18 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
             )?;
             eprintln!("{stem}: N = {n}, {:.2} s", started.elapsed().as_secs_f64());
             rows.push((sampler.name(), dims, proj.name(), n, stem));
-            spectra.push(spec);
+            // Only the mean goes on the sheets: the rest is dropped now, not held for every sampler.
+            spectra.push(spec.mean);
         }
         for (dims, file, title) in SHEETS {
             let panels: Vec<Panel> = rows
                 .iter()
                 .zip(&spectra)
                 .filter(|(row, _)| row.1 == dims)
-                .map(|(row, spec)| Panel {
+                .map(|(row, mean)| Panel {
                     label: format!("{} N={}", row.0, row.3),
-                    values: &spec.mean,
-                    res: spec.res,
+                    values: mean,
+                    res: args.res,
                 })
                 .collect();
             let title = format!(

@@ -115,6 +115,17 @@
 //! 677× → 795× (per-round range 676–995×), by hand 738–764×. The host ran slower than on
 //! 2026-11-26 morning (`power` 1.04 against 0.72–1.17 ms), so compare ratios within one day only.
 //!
+//! Two more tries on the Zen 3 machine (2026-11-26 evening, host load 1–3 from other work; `power`
+//! per realization, 100 sets, one thread, the variants alternated in one process or run back to
+//! back). The grid forced to σ = 1.5 (n = 384, w = 11) against the cost model's σ = 1.25 (n = 320,
+//! w = 14), 12 rounds: 0.948–1.076 ms against 0.936–1.036 ms, a tie; σ = 2 (n = 512, w = 9)
+//! 1.18–1.41 ms. Spreading into a tile that stays in L1 (points counted-sorted by 32 × 32 blocks of
+//! the padded grid, each block's points spread into a zeroed (32 + w − 1)² buffer in point order,
+//! then added to the grid): 0.713–0.722 ms against 0.644–0.705 ms for the per-point spreading
+//! (tiles of 16: 0.95–1.09 ms; of 64: 0.685–0.695 ms). Neither kept: at 0.04 points per grid cell
+//! a tile's points touch few of its cells more than once, so the tile's zeroing and adding cost
+//! what the cache saves.
+//!
 //! What 1000× would take (operation counts per realization at eps = 1e-6: σ = 1.25, n = 320,
 //! w = 14, kernel polynomials of degree 10). Spreading: 2 × 14 × 10 fused multiply-adds per point
 //! for the kernel values and 14 × 14 for the grid, 4096 × 476 × 2 ≈ 3.9 Mflop. FFTs: 289 complex

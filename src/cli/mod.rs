@@ -162,15 +162,19 @@ pub fn require_extension(path: &Path, flag: &str, ext: &str, what: &str) -> Resu
 /// name (`out/`, a folder; `out/.npy`, an extension alone), or with another extension (which would not
 /// be written), is a usage error naming the files and the fix.
 pub fn sibling_outputs(output: &Path, exts: &[&str]) -> Result<Vec<PathBuf>> {
-    // `out/` names a folder (its file_name would be `out`, written beside it as `out.npy`), and
-    // `out/.npy` only an extension (written as hidden `.npy.npy` files).
+    // `out/` and `out/.` name a folder (their file_name would be `out`, written beside it as
+    // `out.npy`), and `out/.npy` only an extension (written as hidden `.npy.npy` files).
     let text = output.as_os_str().to_string_lossy();
-    let name = output.file_name().map(|n| n.to_string_lossy());
-    let bare_extension = name
-        .as_deref()
-        .and_then(|n| n.strip_prefix('.'))
-        .is_some_and(|rest| exts.contains(&rest));
-    if name.is_none() || text.ends_with(std::path::is_separator) || bare_extension {
+    let last = text
+        .rsplit(std::path::is_separator)
+        .next()
+        .unwrap_or_default();
+    let bare_extension = last.strip_prefix('.').is_some_and(|rest| {
+        ["npy", "exr", "png", "txt", "csv", "json"]
+            .iter()
+            .any(|e| e.eq_ignore_ascii_case(rest))
+    });
+    if output.file_name().is_none() || matches!(last, "" | "." | "..") || bare_extension {
         return Err(Error::Usage(format!(
             "-o {} has no usable file name; give a path such as out/image.{}",
             output.display(),
@@ -277,7 +281,10 @@ mod tests {
         use std::path::Path;
         let exts = ["exr", "npy"];
         // A folder (written beside it as out.exr) or an extension alone (hidden .npy.exr files).
-        for bad in ["out/", "out//", "out/.npy", ".exr", "/"] {
+        for bad in [
+            "out/", "out//", "out/.", ".", "out/..", "out/.npy", "out/.NPY", ".exr", "out/.png",
+            "/",
+        ] {
             let e = super::sibling_outputs(Path::new(bad), &exts).unwrap_err();
             assert!(e.to_string().contains("no usable file name"), "{bad}: {e}");
             assert_eq!(e.exit_code(), 2);

@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::points::Projection;
-use crate::render::spectrum::{slice_spectrum, spectrum_png_pixels, SPECTRUM_PNG_KEY};
+use crate::render::spectrum::{slice_spectrum, spectrum_png_key, spectrum_png_pixels};
 use crate::render::{PixelIntegrand, Scene};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -98,17 +98,19 @@ pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
         crate::output::write_npy(&staged(npy), &[k, k], &p)?;
         crate::output::image::write_spectrum_exr(&staged(exr), &p, k)?;
         let key = format!(
-            "Slice spectrum of pixel ({px}, {py}) in {}, K = {k}: {SPECTRUM_PNG_KEY}",
-            proj.name()
+            "Slice spectrum of pixel ({px}, {py}) in {}, K = {k}: {}",
+            proj.name(),
+            spectrum_png_key()
         );
         crate::output::image::write_png_described(&staged(png), [side, side], 1, &pixels, Some(key))
     })?;
     println!(
-        "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {}, {} and {} (the PNG: {SPECTRUM_PNG_KEY})",
+        "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {}, {} and {} (the PNG: {})",
         proj.name(),
         npy.display(),
         exr.display(),
-        png.display()
+        png.display(),
+        spectrum_png_key()
     );
     Ok(())
 }

@@ -188,8 +188,8 @@ pub struct Outcome {
     pub studies: Vec<Study>,
     /// Robustness rows.
     pub robustness: Vec<Robustness>,
-    /// Wall time of the measurements (the studies and the robustness sweep, with the tables they
-    /// build), seconds; the report adds its spectra gallery and plots to it.
+    /// Wall time of the measurements (the pixels' references, the studies and the robustness sweep,
+    /// with the tables they build), seconds; the report adds its spectra gallery and plots to it.
     pub seconds: f64,
 }
 

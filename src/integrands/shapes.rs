@@ -377,7 +377,7 @@ impl Integrand for HalfPlane {
         }
     }
     fn fourier(&self, k: &[i64]) -> Option<Complex64> {
-        Some(polygon::fourier(self.poly.vertices(), k2(k)))
+        Some(polygon::fourier(&self.poly, k2(k)))
     }
     fn mean_square(&self) -> Option<f64> {
         Some(polygon::area(self.poly.vertices()))
@@ -531,7 +531,7 @@ impl Fan {
             .into_iter()
             .map(|(a, b, panels)| {
                 quad::integrate(fan_rule(), a, b, &[], panels, |s| {
-                    polygon::fourier(polygon::clip_square([1.0, s], c).vertices(), k)
+                    polygon::fourier(&polygon::clip_square([1.0, s], c), k)
                 })
             })
             .sum();

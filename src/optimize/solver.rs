@@ -349,6 +349,19 @@ pub fn minimize(
                 best = (p, e);
             }
         }
+        // A round that failed before argmin observed an iteration counts as one but logged none:
+        // its row, so that the log always ends at the iterations done.
+        {
+            let mut log = rows.lock().expect("log lock");
+            if log.last().is_none_or(|r| r.iter < iterations) {
+                log.push(LogRow {
+                    iter: iterations,
+                    seconds: t0.elapsed().as_secs_f64(),
+                    loss: best.1.loss,
+                    solver: solver_name,
+                });
+            }
+        }
         let gain = (previous - best.1.loss) / previous.abs().max(f64::MIN_POSITIVE);
         match (round.failed, use_fallback) {
             (Some(why), true) => break format!("both solvers failed; last: {why}"),

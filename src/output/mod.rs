@@ -104,75 +104,76 @@ pub fn write_group<T>(
     Ok(value)
 }
 
-/// Moves each staged file `(output, staged)` onto its output, all or none: the outputs that exist are
-/// first renamed aside, into a temporary folder beside each (removed with it), then the new files go
-/// in. If a rename fails (an output that cannot be replaced: immutable, or another user's in a sticky
-/// folder), the new files placed so far are removed and the old ones renamed back, and the error says
-/// that nothing was written.
+/// Moves each staged file `(output, staged)` onto its output, all or none. Each existing output is
+/// first kept aside, as a hard link (a copy where links are refused) in a temporary folder beside it;
+/// then each new file is renamed over its output, replacing it in one step. If a rename fails (an
+/// output that cannot be replaced: immutable, or another user's in a sticky folder), the outputs
+/// replaced so far get their kept files back and new ones are removed, and the error says that
+/// nothing was written. Should putting one back fail too, the kept files stay in their folder and
+/// the error names it.
 fn commit(written: &[&(PathBuf, PathBuf)]) -> Result<()> {
-    // Refused by the file's or the folder's permissions: the user's to fix (exit 2), as a folder that
-    // takes no new file is before the work; anything else is a failure of the run.
-    let untouched = |out: &Path, e: std::io::Error| {
-        let text = format!(
-            "cannot replace {}: {e}; no output was written and the existing files are unchanged; make it replaceable (check its owner, the folder's sticky bit, chattr -i) or choose another output name",
-            out.display()
-        );
-        if e.kind() == std::io::ErrorKind::PermissionDenied {
-            Error::Usage(text)
-        } else {
-            Error::Io {
-                context: text,
-                source: e,
-            }
-        }
-    };
-    let restore = |set_aside: &[(&Path, PathBuf)]| {
-        for (out, old) in set_aside.iter().rev() {
-            // Best effort: a rename that just worked one way works back.
-            let _ = std::fs::rename(old, out);
-        }
-    };
     let mut asides: Vec<(PathBuf, tempfile::TempDir)> = Vec::new();
-    let mut set_aside: Vec<(&Path, PathBuf)> = Vec::new();
+    let mut kept: Vec<Option<PathBuf>> = Vec::with_capacity(written.len());
     for (out, _) in written {
         if out.symlink_metadata().is_err() {
+            kept.push(None);
             continue;
         }
         let dir = folder_of(out).to_path_buf();
         let slot = match asides.iter().position(|(d, _)| *d == dir) {
             Some(i) => i,
-            None => match staging_folder(&dir) {
-                Ok(tmp) => {
-                    asides.push((dir, tmp));
-                    asides.len() - 1
-                }
-                Err(e) => {
-                    restore(&set_aside);
-                    return Err(e);
-                }
-            },
+            None => {
+                asides.push((dir.clone(), staging_folder(&dir)?));
+                asides.len() - 1
+            }
         };
         let old = asides[slot]
             .1
             .path()
             .join(out.file_name().expect("an output has a file name"));
-        if let Err(e) = std::fs::rename(out, &old) {
-            restore(&set_aside);
-            return Err(untouched(out, e));
+        if std::fs::hard_link(out, &old).is_err() {
+            std::fs::copy(out, &old).map_err(|e| Error::io("keep a copy of", out, e))?;
         }
-        set_aside.push((out, old));
+        kept.push(Some(old));
     }
     for (i, (out, staged)) in written.iter().enumerate() {
-        if let Err(e) = move_file(staged, out) {
-            for (placed, _) in &written[..i] {
-                let _ = std::fs::remove_file(placed);
-            }
-            restore(&set_aside);
-            return Err(match e {
-                Error::Io { source, .. } => untouched(out, source),
-                other => other,
-            });
+        let Err(e) = move_file(staged, out) else {
+            continue;
+        };
+        let mut restored = true;
+        for ((placed, _), old) in written[..i].iter().zip(&kept) {
+            restored &= match old {
+                Some(old) => std::fs::rename(old, placed).is_ok(),
+                None => std::fs::remove_file(placed).is_ok(),
+            };
         }
+        if !restored {
+            let folders: Vec<String> = asides
+                .into_iter()
+                .map(|(_, tmp)| tmp.keep().display().to_string())
+                .collect();
+            return Err(Error::Numerical(format!(
+                "{e}; the outputs written before it could not all be put back: the earlier files are kept in {}",
+                folders.join(", ")
+            )));
+        }
+        let Error::Io { source, .. } = e else {
+            return Err(e);
+        };
+        let unchanged = "no output was written and the existing files are unchanged";
+        // Refused by the file's or the folder's permissions: the user's to fix (exit 2), as a
+        // folder that takes no new file is before the work; anything else is a failure of the run.
+        return Err(if source.kind() == std::io::ErrorKind::PermissionDenied {
+            Error::Usage(format!(
+                "cannot write {}: {source}; {unchanged}; make the file replaceable (check its owner, the folder's sticky bit, chattr -i) or choose another output name",
+                out.display()
+            ))
+        } else {
+            Error::Io {
+                context: format!("cannot write {} ({unchanged})", out.display()),
+                source,
+            }
+        });
     }
     Ok(())
 }
@@ -586,7 +587,8 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> 
     })
 }
 
-/// Longest file or folder name, in bytes, that common file systems take (ext4, XFS, APFS, NTFS).
+/// Longest file or folder name, in bytes, that Linux file systems take (ext4, XFS, btrfs). APFS and
+/// NTFS count 255 characters instead, so there a longer name of non-ASCII characters is refused too.
 const MAX_NAME_BYTES: usize = 255;
 
 /// Checks, before any work, that a command's output files can be written without harm: no output is
@@ -814,8 +816,6 @@ mod tests {
         assert!(leftovers(dir.path()).is_empty());
     }
 
-    /// A folder whose writing fails keeps its old files and gets no new one, and goes if the call
-    /// created it; one that succeeds gets every file, subfolders merged.
     #[test]
     fn a_commit_that_fails_midway_restores_every_output() {
         // The second staged file is missing, so its move fails after the first output was replaced
@@ -846,6 +846,15 @@ mod tests {
             "a new output placed before the failure is removed"
         );
         assert!(leftovers(dir.path()).is_empty());
+        // With every staged file there, all are replaced and nothing is kept aside.
+        std::fs::write(&wb.1, "new b").unwrap();
+        std::fs::write(&wc.1, "new c").unwrap();
+        std::fs::write(&wa.1, "new a").unwrap();
+        commit(&[&wa, &wc, &wb]).unwrap();
+        for (path, text) in [(&a, "new a"), (&b, "new b"), (&c, "new c")] {
+            assert_eq!(std::fs::read_to_string(path).unwrap(), text);
+        }
+        assert!(leftovers(dir.path()).is_empty());
     }
 
     #[test]
@@ -860,6 +869,8 @@ mod tests {
         std::fs::write(&fits, "").unwrap();
     }
 
+    /// A folder whose writing fails keeps its old files and gets no new one, and goes if the call
+    /// created it; one that succeeds gets every file, subfolders merged.
     #[test]
     fn a_failed_folder_writes_nothing() {
         let dir = tempfile::tempdir().unwrap();

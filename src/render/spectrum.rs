@@ -51,10 +51,18 @@ where
 /// Smallest side of the PNG view; smaller grids are scaled up by an integer factor (nearest).
 pub const PNG_MIN_SIDE: usize = 512;
 
-/// How the PNG view of [`spectrum_png_pixels`] reads (ASCII).
-pub const SPECTRUM_PNG_KEY: &str = "log10(P / max P) from -6 (black) to 0 (white), the max taken over k != 0; k1 right, k2 up, k = 0 at the centre";
+/// Decades below the largest `P` that the PNG view spans (black below them).
+const PNG_DECADES: f64 = 6.0;
 
-/// The PNG view of an integrand spectrum: `log10(P / max_{k≠0} P)` mapped from `[−6, 0]` to 0..255,
+/// How the PNG view of [`spectrum_png_pixels`] reads (ASCII).
+pub fn spectrum_png_key() -> String {
+    format!(
+        "log10(P / max P) from -{PNG_DECADES} (black) to 0 (white), the max taken over k != 0; k1 right, k2 up, k = 0 at the centre"
+    )
+}
+
+/// The PNG view of an integrand spectrum: `log10(P / max_{k≠0} P)` mapped from `[−6, 0]`
+/// ([`PNG_DECADES`]) to 0..255,
 /// largest `k2` on top, scaled up by an integer factor to at least [`PNG_MIN_SIDE`] pixels; the DC bin
 /// (the squared mean) is left out of the maximum. Returns the side and the grey pixels.
 pub fn spectrum_png_pixels(p: &[f64], res: usize) -> (usize, Vec<u8>) {
@@ -68,8 +76,12 @@ pub fn spectrum_png_pixels(p: &[f64], res: usize) -> (usize, Vec<u8>) {
     let grey: Vec<u8> = crate::output::image::spectrum_image_rows(p, res)
         .iter()
         .map(|&v| {
-            let l = if v > 0.0 { (v / max).log10() } else { -6.0 };
-            (((l + 6.0) / 6.0).clamp(0.0, 1.0) * 255.0).round() as u8
+            let l = if v > 0.0 {
+                (v / max).log10()
+            } else {
+                -PNG_DECADES
+            };
+            (((l + PNG_DECADES) / PNG_DECADES).clamp(0.0, 1.0) * 255.0).round() as u8
         })
         .collect();
     crate::output::image::upscaled(&grey, res, PNG_MIN_SIDE)

@@ -582,8 +582,9 @@ impl Target {
         // radius suits fewer points than that (a smaller one darkens nothing, a larger one too much).
         if matches!(self, Target::BlueNoise(_)) && REACH * (n as f64) < 4.0 {
             return Err(Error::Input(format!(
-                "N = {n} is too small for a blue-noise target: its smallest dark disc holds the 4 frequency cells at |k| = 1, and {n} points can darken only about {}; use N >= 4",
-                number(REACH * n as f64)
+                "N = {n} is too small for a blue-noise target: its smallest dark disc holds the 4 frequency cells at |k| = 1, and {n} points can darken only about {}; use N >= {}",
+                number(REACH * n as f64),
+                (4.0 / REACH).ceil()
             )));
         }
         // Refuse hopeless targets before laying out a grid that may not fit in memory.
@@ -978,9 +979,9 @@ mod tests {
         // The largest size allowed still gets advice that reads: a finite count and a fraction that
         // is not rounded to 0.
         let wide = Target::parse("kind = \"blue-noise\"\nradius = 1024\n").unwrap();
-        let m = wide.grid(2).unwrap_err().to_string();
+        let m = wide.grid(4).unwrap_err().to_string();
         assert!(
-            m.contains("darkens 6588397 frequency cells") && m.contains("fraction 3.036e-7."),
+            m.contains("darkens 13176795 frequency cells") && m.contains("fraction 3.036e-7."),
             "{m}"
         );
         let e = Target::parse("kind = \"blue-noise\"\nradius = 0.5\ndark_weight = 1e300\n");

@@ -822,18 +822,10 @@ mod tests {
         // (as a rename onto an immutable file would): both outputs must end as they were.
         let dir = tempfile::tempdir().unwrap();
         let stage = tempfile::tempdir().unwrap();
-        let (a, b, c) = (
-            dir.path().join("a.csv"),
-            dir.path().join("b.csv"),
-            dir.path().join("c.csv"),
-        );
+        let csv = |d: &Path| ["a", "b", "c"].map(|n| d.join(format!("{n}.csv")));
+        let ([a, b, c], [sa, sb, sc]) = (csv(dir.path()), csv(stage.path()));
         std::fs::write(&a, "old a").unwrap();
         std::fs::write(&b, "old b").unwrap();
-        let (sa, sb, sc) = (
-            stage.path().join("a.csv"),
-            stage.path().join("b.csv"),
-            stage.path().join("c.csv"),
-        );
         std::fs::write(&sa, "new a").unwrap();
         std::fs::write(&sc, "new c").unwrap();
         let (wa, wc, wb) = ((a.clone(), sa), (c.clone(), sc), (b.clone(), sb));

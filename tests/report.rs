@@ -575,10 +575,28 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             .min_by(|a, b| a[at_max].mse.total_cmp(&b[at_max].mse))
             .unwrap();
         let classical = best_classical(subject, at_max);
+        // A sampler measured at another N than the largest asked is marked with it.
+        let other_n = |p: &Point| {
+            if p.n == ns[at_max] {
+                String::new()
+            } else {
+                format!(" (N={})", p.n)
+            }
+        };
+        let jittered = own.iter().find(|s| s[0].sampler == SAMPLERS[0].0).unwrap();
         assert_eq!((&row[0], &row[1]), (subject, class));
-        assert_eq!(row[2], format!("{} ({classical:.3e})", SAMPLERS[0].0));
+        assert_eq!(
+            row[2],
+            format!(
+                "{} ({classical:.3e}){}",
+                SAMPLERS[0].0,
+                other_n(&jittered[at_max])
+            )
+        );
         assert!(
-            row[3].split(" = ").any(|name| name == best[0].sampler),
+            row[3]
+                .split(" = ")
+                .any(|name| name.split(" (N=").next() == Some(best[0].sampler.as_str())),
             "{subject}: {} is not named best in {row:?}",
             best[0].sampler
         );

@@ -371,6 +371,16 @@ fn largest_n_index(ns: &[usize]) -> usize {
         .map_or(0, |(i, _)| i)
 }
 
+/// ` (N=n)` when a sampler measured at `n` instead of the `asked` N (the nearest it makes), else
+/// nothing.
+fn other_n(n: usize, asked: usize) -> String {
+    if n == asked {
+        String::new()
+    } else {
+        format!(" (N={n})")
+    }
+}
+
 /// The studies of one subject, in report order.
 fn studies_of<'a>(outcome: &'a Outcome, subject: &str) -> Vec<&'a Study> {
     outcome
@@ -560,7 +570,7 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
          (samplers that tie bit for bit are named together, the one most robust to oracle error first), its gain over that classical sampler (its MSE \
          divided by this one's), its time per estimate and its one-off set-up, and its lowest gain when the \
          samplers' shear (the oracle's; see Integrands) is off by {errors}, with the error where it falls (for the first named; — when it does not use \
-         the oracle).\n"
+         the oracle). (N=…) marks a sampler that cannot make N = {nmax} and was measured at its nearest N.\n"
     )?;
     writeln!(
         w,
@@ -611,12 +621,18 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
         let p = &first.points[at];
         writeln!(
             w,
-            "| {} | {} | {} ({:.3e}) | {} | {} | {:.3} | {:.2} | {lowest} |",
+            "| {} | {} | {} ({:.3e}){} | {}{}{} | {} | {:.3} | {:.2} | {lowest} |",
             subject.label,
             subject.class,
             classical.sampler,
             reference,
-            names.join(" = "),
+            other_n(classical.points[at].n, nmax),
+            names[0],
+            other_n(p.n, nmax),
+            names[1..]
+                .iter()
+                .map(|n| format!(" = {n}"))
+                .collect::<String>(),
             gain_text(reference, p.mse),
             p.median_seconds * 1e3,
             first.setup_seconds[at],
@@ -648,11 +664,7 @@ fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io:
     for s in &studies {
         write!(w, "| {} | {} |", s.sampler, s.family)?;
         for (p, n) in s.points.iter().zip(&c.ns) {
-            let shown = if p.n == *n {
-                String::new()
-            } else {
-                format!(" (N={})", p.n)
-            };
+            let shown = other_n(p.n, *n);
             write!(w, " {:.3e} ± {:.1e}{shown} |", p.mse, p.mse_stderr)?;
         }
         let p = &s.points[last];
@@ -663,12 +675,7 @@ fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io:
             local_slope_text(s),
             p.median_seconds * 1e3,
             s.setup_seconds[last],
-            gain_text(reference, p.mse)
-                + &if p.n == nmax {
-                    String::new()
-                } else {
-                    format!(" (N={})", p.n)
-                }
+            gain_text(reference, p.mse) + &other_n(p.n, nmax)
         )?;
     }
     if let Some(classical) = classical {

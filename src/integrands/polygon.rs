@@ -2,6 +2,7 @@
 //! `[0,1)²`, its area and its exact torus Fourier coefficients (divergence theorem, one closed-form term
 //! per edge).
 
+use crate::spectrum::exact::turn;
 use rustfft::num_complex::Complex64;
 use std::f64::consts::PI;
 
@@ -69,17 +70,6 @@ fn sinc(t: f64) -> f64 {
     } else {
         t.sin() / t
     }
-}
-
-/// `exp(−2πi t)`, with `t` reduced mod 1 first for accuracy at large `t`; exactly 1 at integers (the
-/// square's corners at integer frequencies), without a sine.
-fn turn(t: f64) -> Complex64 {
-    let t = t - t.floor();
-    if t == 0.0 {
-        return Complex64::new(1.0, 0.0);
-    }
-    let (s, c) = (2.0 * PI * t).sin_cos();
-    Complex64::new(c, -s)
 }
 
 /// Below this `|k·d|` an edge takes the midpoint form of [`fourier`]: the vertex form divides a

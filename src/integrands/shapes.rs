@@ -38,9 +38,7 @@ fn shear(name: &str, key: &str, v: f64) -> Result<f64> {
 
 /// `exp(−2πi k·c)`, with `k·c` reduced mod 1 first.
 fn phase(k: [i64; 2], c: [f64; 2]) -> Complex64 {
-    let t = (k[0] as f64 * c[0] + k[1] as f64 * c[1]).rem_euclid(1.0);
-    let (s, co) = (2.0 * PI * t).sin_cos();
-    Complex64::new(co, -s)
+    crate::spectrum::exact::turn(k[0] as f64 * c[0] + k[1] as f64 * c[1])
 }
 
 fn k2(k: &[i64]) -> [i64; 2] {

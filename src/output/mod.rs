@@ -73,14 +73,7 @@ pub fn write_group<T>(
         let name = out
             .file_name()
             .ok_or_else(|| Error::Usage(format!("{}: give a file name", out.display())))?;
-        let slot = match folders.iter().position(|(d, _)| *d == dir) {
-            Some(i) => i,
-            None => {
-                folders.push((dir.clone(), staging_folder(&dir)?));
-                folders.len() - 1
-            }
-        };
-        staged.push((out.to_path_buf(), folders[slot].1.path().join(name)));
+        staged.push((out.to_path_buf(), folder_for(&mut folders, dir)?.join(name)));
     }
     let staged_path = |out: &Path| -> PathBuf {
         staged
@@ -119,17 +112,7 @@ fn commit(written: &[&(PathBuf, PathBuf)]) -> Result<()> {
             kept.push(None);
             continue;
         }
-        let dir = folder_of(out).to_path_buf();
-        let slot = match asides.iter().position(|(d, _)| *d == dir) {
-            Some(i) => i,
-            None => {
-                asides.push((dir.clone(), staging_folder(&dir)?));
-                asides.len() - 1
-            }
-        };
-        let old = asides[slot]
-            .1
-            .path()
+        let old = folder_for(&mut asides, folder_of(out).to_path_buf())?
             .join(out.file_name().expect("an output has a file name"));
         if std::fs::hard_link(out, &old).is_err() {
             std::fs::copy(out, &old).map_err(|e| Error::io("keep a copy of", out, e))?;
@@ -357,6 +340,20 @@ fn create_folders(dest: &Path, created: &mut Vec<PathBuf>) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The temporary folder of `folders` inside `dir`, made by [`staging_folder`] the first time `dir`
+/// is asked for.
+fn folder_for(folders: &mut Vec<(PathBuf, tempfile::TempDir)>, dir: PathBuf) -> Result<&Path> {
+    let slot = match folders.iter().position(|(d, _)| *d == dir) {
+        Some(i) => i,
+        None => {
+            let tmp = staging_folder(&dir)?;
+            folders.push((dir, tmp));
+            folders.len() - 1
+        }
+    };
+    Ok(folders[slot].1.path())
 }
 
 /// A temporary folder inside `dir` (created if missing), on the file system of the outputs.

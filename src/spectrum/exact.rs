@@ -14,12 +14,21 @@ pub fn sum_error(n: usize, res: usize) -> f64 {
         * (f64::EPSILON / 2.0)
 }
 
-/// `exp(−2πi k c)`, computed directly: `k·c` is reduced mod 1 before scaling by 2π, so the argument
-/// stays small whatever `k` and `c`.
-pub fn phase(k: i64, c: f64) -> Complex64 {
-    let t = (k as f64 * c).rem_euclid(1.0);
+/// `exp(−2πi t)`, with `t` reduced mod 1 before scaling by 2π, so the argument stays small whatever
+/// `t`; exactly 1 at integers (e.g. a corner of the unit square at an integer frequency), without a
+/// sine.
+pub fn turn(t: f64) -> Complex64 {
+    let t = t - t.floor();
+    if t == 0.0 {
+        return Complex64::new(1.0, 0.0);
+    }
     let (s, co) = (TAU * t).sin_cos();
     Complex64::new(co, -s)
+}
+
+/// `exp(−2πi k c)`, computed directly ([`turn`] of `k·c`).
+pub fn phase(k: i64, c: f64) -> Complex64 {
+    turn(k as f64 * c)
 }
 
 /// `exp(−2πi k c)` for `k = −K/2 … K/2−1`, each computed directly (no recurrence, no drift).

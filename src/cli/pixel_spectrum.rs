@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::points::Projection;
-use crate::render::spectrum::{slice_spectrum, spectrum_png_key, spectrum_png_pixels};
+use crate::render::spectrum::{integrand_png_key, slice_spectrum, spectrum_png_pixels};
 use crate::render::{PixelIntegrand, Scene};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -100,7 +100,7 @@ pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
         let key = format!(
             "Slice spectrum of pixel ({px}, {py}) in {}, K = {k}: {}",
             proj.name(),
-            spectrum_png_key()
+            integrand_png_key()
         );
         crate::output::image::write_png_described(&staged(png), [side, side], 1, &pixels, Some(key))
     })?;
@@ -110,7 +110,7 @@ pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
         npy.display(),
         exr.display(),
         png.display(),
-        spectrum_png_key()
+        integrand_png_key()
     );
     Ok(())
 }

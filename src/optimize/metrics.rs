@@ -23,7 +23,8 @@ pub struct Fit {
     /// Largest `|mean P − mean T|` over the annuli `r − ½ ≤ |k| < r + ½` that lie wholly inside the fit
     /// radius, over their non-dark cells (at least [`MIN_ANNULUS_CELLS`] of them) (goal: `≤ 0.1`).
     pub annular_max_error: f64,
-    /// The annulus with the largest error, as `|k| / sqrt(N)`.
+    /// The annulus with the largest error, as `|k| / sqrt(N)`; 0 when no annulus is compared
+    /// (`annuli == 0`: the annulus `|k| < ½` holds one cell, so a compared annulus is never at 0).
     pub worst_radius: f64,
     /// Root mean square of the same annular errors.
     pub annular_rms_error: f64,

@@ -28,15 +28,16 @@ fn folder_of(path: &Path) -> &Path {
 }
 
 /// Writes `path` atomically: `fill` writes into a temporary file in the same folder, which is renamed
-/// onto `path` only if `fill` succeeds. The file gets the permissions `File::create` would give it.
+/// onto `path` only if `fill` succeeds; folders made for it go again (while empty) if it does not.
+/// The file gets the permissions `File::create` would give it.
 pub fn write_atomic<F>(path: &Path, fill: F) -> Result<()>
 where
     F: FnOnce(&mut BufWriter<&mut std::fs::File>) -> std::io::Result<()>,
 {
     let dir = folder_of(path);
-    if !dir.is_dir() {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io("create the folder", dir, e))?;
-    }
+    // Declared before the temporary file, so dropped after it: the folders it made go once empty.
+    let mut made = NewFolders::default();
+    made.make(dir)?;
     let mut builder = tempfile::Builder::new();
     builder.prefix(".anisospec-");
     // A temporary file is created owner-only (0600); an output is an ordinary file, 0666 less the
@@ -54,6 +55,7 @@ where
     }
     tmp.persist(path)
         .map_err(|e| Error::io("write", path, e.error))?;
+    made.keep();
     Ok(())
 }
 
@@ -61,11 +63,14 @@ where
 /// them (DESIGN §7): `write` is handed a map from each of `outputs` to a path in a temporary folder
 /// beside it, and writes there. Only when it succeeds, and no folder stands where an output goes, are
 /// the files it wrote moved into place; an error names the output, not its temporary path. The
-/// outputs' folders are created first, as each single write would.
+/// outputs' folders are created first, as each single write would, and go again (while empty) if
+/// the group is not written.
 pub fn write_group<T>(
     outputs: &[&Path],
     write: impl FnOnce(&dyn Fn(&Path) -> PathBuf) -> Result<T>,
 ) -> Result<T> {
+    // Declared before the temporary folders, so dropped after them: the folders made go once empty.
+    let mut made = NewFolders::default();
     let mut folders: Vec<(PathBuf, tempfile::TempDir)> = Vec::new();
     let mut staged: Vec<(PathBuf, PathBuf)> = Vec::new();
     for out in outputs {
@@ -73,7 +78,10 @@ pub fn write_group<T>(
         let name = out
             .file_name()
             .ok_or_else(|| Error::Usage(format!("{}: give a file name", out.display())))?;
-        staged.push((out.to_path_buf(), folder_for(&mut folders, dir)?.join(name)));
+        staged.push((
+            out.to_path_buf(),
+            folder_for(&mut folders, &mut made, dir)?.join(name),
+        ));
     }
     let staged_path = |out: &Path| -> PathBuf {
         staged
@@ -94,6 +102,7 @@ pub fn write_group<T>(
         }
     }
     commit(&written)?;
+    made.keep();
     Ok(value)
 }
 
@@ -112,8 +121,14 @@ fn commit(written: &[&(PathBuf, PathBuf)]) -> Result<()> {
             kept.push(None);
             continue;
         }
-        let old = folder_for(&mut asides, folder_of(out).to_path_buf())?
-            .join(out.file_name().expect("an output has a file name"));
+        // An existing output's folder exists: nothing is made for the kept files but the temporary
+        // folder, which goes with `asides`.
+        let old = folder_for(
+            &mut asides,
+            &mut NewFolders::default(),
+            folder_of(out).to_path_buf(),
+        )?
+        .join(out.file_name().expect("an output has a file name"));
         if std::fs::hard_link(out, &old).is_err() {
             std::fs::copy(out, &old).map_err(|e| Error::io("keep a copy of", out, e))?;
         }
@@ -267,31 +282,25 @@ pub fn write_folder<T>(
     marker: ReportMarker,
     write: impl FnOnce(&Path) -> Result<T>,
 ) -> Result<T> {
-    let mut created = Vec::new();
-    let result = create_folders(dest, &mut created)
-        .and_then(|()| staging_folder(dest))
-        .and_then(|staging| {
-            let value =
-                write(staging.path()).map_err(|e| e.with_path_replaced(staging.path(), dest))?;
-            let earlier = read_manifest(dest)?;
-            let before_manifest = earlier.is_none() && marker.is_in(dest);
-            let earlier = earlier.unwrap_or_default();
-            let incoming = check_tree(staging.path(), dest, |target| {
-                in_real_folders(dest, target)
-                    && (before_manifest || earlier.iter().any(|e| e == target))
-            })?;
-            write_manifest(dest, earlier.iter().chain(&incoming))?;
-            let written = move_tree(staging.path(), dest)?;
-            prune_stale(dest, &earlier, &written)?;
-            write_manifest(dest, written.iter())?;
-            Ok(value)
-        });
-    if result.is_err() {
-        // Only empty folders go, innermost first; a failure to remove one changes nothing.
-        for folder in created.iter().rev() {
-            let _ = std::fs::remove_dir(folder);
-        }
-    } else {
+    let mut made = NewFolders::default();
+    let result = staging_folder(dest, &mut made).and_then(|staging| {
+        let value =
+            write(staging.path()).map_err(|e| e.with_path_replaced(staging.path(), dest))?;
+        let earlier = read_manifest(dest)?;
+        let before_manifest = earlier.is_none() && marker.is_in(dest);
+        let earlier = earlier.unwrap_or_default();
+        let incoming = check_tree(staging.path(), dest, |target| {
+            in_real_folders(dest, target)
+                && (before_manifest || earlier.iter().any(|e| e == target))
+        })?;
+        write_manifest(dest, earlier.iter().chain(&incoming))?;
+        let written = move_tree(staging.path(), dest)?;
+        prune_stale(dest, &earlier, &written)?;
+        write_manifest(dest, written.iter())?;
+        Ok(value)
+    });
+    if result.is_ok() {
+        made.keep();
         warn_left_staging(dest);
     }
     result
@@ -324,31 +333,57 @@ fn left_staging(dest: &Path) -> Vec<PathBuf> {
     left
 }
 
-/// Makes `dest` and its missing ancestors, outermost first, and lists in `created` the folders this
-/// call made: one that exists already, or that another process makes first, is not listed.
-fn create_folders(dest: &Path, created: &mut Vec<PathBuf>) -> Result<()> {
-    let mut chain: Vec<&Path> = dest
-        .ancestors()
-        .take_while(|a| !a.as_os_str().is_empty())
-        .collect();
-    chain.reverse();
-    for folder in chain {
-        match std::fs::create_dir(folder) {
-            Ok(()) => created.push(folder.to_path_buf()),
-            Err(_) if folder.is_dir() => {}
-            Err(e) => return Err(Error::io("create the folder", folder, e)),
+/// The folders a write made for its outputs: unless [`NewFolders::keep`] is called, they go again
+/// when this is dropped (innermost first, and only while empty), so a write that fails leaves no
+/// empty folder behind.
+#[derive(Default)]
+struct NewFolders(Vec<PathBuf>);
+
+impl NewFolders {
+    /// Makes `dest` and its missing ancestors, outermost first, and lists the folders this call
+    /// made: one that exists already, or that another process makes first, is not listed.
+    fn make(&mut self, dest: &Path) -> Result<()> {
+        let mut chain: Vec<&Path> = dest
+            .ancestors()
+            .take_while(|a| !a.as_os_str().is_empty())
+            .collect();
+        chain.reverse();
+        for folder in chain {
+            match std::fs::create_dir(folder) {
+                Ok(()) => self.0.push(folder.to_path_buf()),
+                Err(_) if folder.is_dir() => {}
+                Err(e) => return Err(Error::io("create the folder", folder, e)),
+            }
+        }
+        Ok(())
+    }
+
+    /// The outputs are in place: the folders stay.
+    fn keep(mut self) {
+        self.0.clear();
+    }
+}
+
+impl Drop for NewFolders {
+    fn drop(&mut self) {
+        // A failure to remove one (not empty, or gone) changes nothing.
+        for folder in self.0.iter().rev() {
+            let _ = std::fs::remove_dir(folder);
         }
     }
-    Ok(())
 }
 
 /// The temporary folder of `folders` inside `dir`, made by [`staging_folder`] the first time `dir`
 /// is asked for.
-fn folder_for(folders: &mut Vec<(PathBuf, tempfile::TempDir)>, dir: PathBuf) -> Result<&Path> {
+fn folder_for<'a>(
+    folders: &'a mut Vec<(PathBuf, tempfile::TempDir)>,
+    made: &mut NewFolders,
+    dir: PathBuf,
+) -> Result<&'a Path> {
     let slot = match folders.iter().position(|(d, _)| *d == dir) {
         Some(i) => i,
         None => {
-            let tmp = staging_folder(&dir)?;
+            let tmp = staging_folder(&dir, made)?;
             folders.push((dir, tmp));
             folders.len() - 1
         }
@@ -356,9 +391,10 @@ fn folder_for(folders: &mut Vec<(PathBuf, tempfile::TempDir)>, dir: PathBuf) -> 
     Ok(folders[slot].1.path())
 }
 
-/// A temporary folder inside `dir` (created if missing), on the file system of the outputs.
-fn staging_folder(dir: &Path) -> Result<tempfile::TempDir> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io("create the folder", dir, e))?;
+/// A temporary folder inside `dir` (created if missing, and listed in `made`), on the file system of
+/// the outputs.
+fn staging_folder(dir: &Path, made: &mut NewFolders) -> Result<tempfile::TempDir> {
+    made.make(dir)?;
     tempfile::Builder::new()
         .prefix(".anisospec-")
         .tempdir_in(dir)
@@ -787,7 +823,8 @@ mod tests {
     }
 
     /// A group whose second write fails leaves neither output, keeps an existing output's old bytes,
-    /// and leaves no temporary folder; a group that succeeds writes both, in two folders.
+    /// and leaves no temporary folder nor the folder it made; a group that succeeds writes both, in
+    /// two folders.
     #[test]
     fn a_failed_group_writes_nothing() {
         let dir = tempfile::tempdir().unwrap();
@@ -801,7 +838,10 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&a).unwrap(), "old");
         assert!(!b.exists());
         assert!(leftovers(dir.path()).is_empty());
-        assert!(leftovers(&dir.path().join("sub")).is_empty());
+        assert!(
+            !dir.path().join("sub").exists(),
+            "the folder made for b goes"
+        );
 
         write_group(&[&a, &b], |staged| {
             write_atomic(&staged(&a), |w| writeln!(w, "new a"))?;
@@ -811,6 +851,23 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&a).unwrap(), "new a\n");
         assert_eq!(std::fs::read_to_string(&b).unwrap(), "new b\n");
         assert!(leftovers(dir.path()).is_empty());
+    }
+
+    /// A single write that fails leaves neither the file nor the folders made for it, and keeps a
+    /// folder that was there before (with a file of the user's in it).
+    #[test]
+    fn a_failed_write_leaves_no_folder_it_made() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("new/deeper/a.npy");
+        let failed = write_atomic(&out, |_| Err(std::io::Error::other("the data failed")));
+        assert!(failed.is_err());
+        assert!(!dir.path().join("new").exists());
+        std::fs::create_dir(dir.path().join("mine")).unwrap();
+        let out = dir.path().join("mine/b.npy");
+        assert!(write_atomic(&out, |_| Err(std::io::Error::other("failed"))).is_err());
+        assert!(dir.path().join("mine").is_dir() && !out.exists());
+        write_atomic(&dir.path().join("new/deeper/a.npy"), |w| writeln!(w, "ok")).unwrap();
+        assert_eq!(read_to(&dir.path().join("new/deeper"), "a.npy"), "ok\n");
     }
 
     #[test]

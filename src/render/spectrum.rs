@@ -54,8 +54,9 @@ pub const PNG_MIN_SIDE: usize = 512;
 /// Decades below the largest `P` that the PNG view spans (black below them).
 const PNG_DECADES: f64 = 6.0;
 
-/// How the PNG view of [`spectrum_png_pixels`] reads (ASCII).
-pub fn spectrum_png_key() -> String {
+/// How the PNG view of an integrand's spectrum ([`spectrum_png_pixels`]) reads (ASCII); a point set's
+/// spectrum PNG has a fixed range instead ([`crate::output::image::spectrum_png_key`]).
+pub fn integrand_png_key() -> String {
     format!(
         "log10(P / max P) from -{PNG_DECADES} (black) to 0 (white), the max taken over k != 0; k1 right, k2 up, k = 0 at the centre"
     )

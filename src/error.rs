@@ -36,6 +36,11 @@ impl Error {
         }
     }
 
+    /// An I/O error whose reader closed the pipe (`anisospec ... | head`).
+    pub fn is_broken_pipe(&self) -> bool {
+        matches!(self, Error::Io { source, .. } if source.kind() == std::io::ErrorKind::BrokenPipe)
+    }
+
     /// Wraps an I/O error with the path it concerns.
     pub fn io(what: &str, path: &Path, source: std::io::Error) -> Self {
         Error::Io {

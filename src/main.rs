@@ -135,6 +135,9 @@ fn main() -> ExitCode {
     });
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // A reader that closed the pipe (`| head`) wanted no more: stop quietly, with the status a
+        // process stopped by SIGPIPE has.
+        Err(e) if e.is_broken_pipe() => ExitCode::from(141),
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code() as u8)
@@ -146,28 +149,24 @@ fn main() -> ExitCode {
 fn run(command: &Command) -> anisospec::error::Result<()> {
     match command {
         Command::Samplers => {
+            let mut listing = String::new();
             for info in anisospec::samplers::catalog() {
                 let dims: Vec<String> = info.dims.iter().map(|d| format!("{d}D")).collect();
-                println!(
-                    "{:<12} {:<6} {}  [N: {}]",
+                listing += &format!(
+                    "{:<12} {:<6} {}  [N: {}]\n",
                     info.name,
                     dims.join(","),
                     info.summary,
                     info.valid_n
                 );
             }
-            println!(
-                "table:PATH   2D,4D  optimized sets written by `anisospec optimize` (PATH.npy or .txt; \
-                 PATH may hold {{n}} for a family of tables at several N); each use takes one set at \
-                 random and shifts it  [N: the tables' own]"
-            );
-            println!(
-                "lattice:Z    2D,4D  rank-1 lattice with the generating vector Z you give, e.g. \
+            listing += "table:PATH   2D,4D  optimized sets written by `anisospec optimize` (PATH.npy or .txt; \
+                 PATH may hold {n} for a family of tables at several N); each use takes one set at \
+                 random and shifts it  [N: the tables' own]\n";
+            listing += "lattice:Z    2D,4D  rank-1 lattice with the generating vector Z you give, e.g. \
                  lattice:1:34 or lattice:1:163:271:141 (entries taken mod N, each coprime to N), randomly \
-                 shifted  \
-                 [N: any N <= 2^20]"
-            );
-            Ok(())
+                 shifted  [N: any N <= 2^20]\n";
+            cli::write_stdout(format_args!("{listing}"))
         }
         Command::Sample(a) => cli::sample::run(a),
         Command::Spectrum(a) => cli::spectrum::run(a),

@@ -3353,3 +3353,44 @@ fn pixels_refuse_what_only_analytic_integrands_take() {
         &report,
     );
 }
+
+/// Results written to a standard output that cannot take them end in an error naming standard
+/// output (exit 1), not a panic; a reader that closes the pipe early stops the run quietly with the
+/// status of SIGPIPE (141).
+#[cfg(target_os = "linux")]
+#[test]
+fn an_unwritable_standard_output_is_an_error_not_a_panic() {
+    for args in [
+        &["samplers"][..],
+        &["integrands"],
+        &["integrands", "--check", "step"],
+        &["compare", "--print-config"],
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_anisospec"))
+            .args(args)
+            .stdout(std::fs::File::create("/dev/full").unwrap())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains("cannot write the results to standard output")
+                && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
+    }
+    // 1500 lines of results into a pipe closed after the first byte.
+    let ns: Vec<String> = (1..=1500).map(|n| n.to_string()).collect();
+    let o = Command::new("bash")
+        .arg("-c")
+        .arg(format!(
+            "\"$0\" variance --sampler random --integrand step -n {} --res 8 --realizations 2 --cones 1 | head -c 1 >/dev/null; echo \"${{PIPESTATUS[0]}}\"",
+            ns.join(",")
+        ))
+        .arg(env!("CARGO_BIN_EXE_anisospec"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "141", "{err}");
+    assert!(err.is_empty(), "{err}");
+}

@@ -47,7 +47,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         config.seed = seed;
     }
     if args.print_config {
-        print!("{}", config.to_toml()?);
+        out!("{}", config.to_toml()?);
         return Ok(());
     }
     let cache = args

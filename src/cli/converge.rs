@@ -110,7 +110,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         studies.push(study);
     }
     bar.finish_and_clear();
-    println!(
+    outln!(
         "integrand {} (integral {:.12e}), R = {}; seconds: wall time of all R realizations at an N, after the one-off set-up",
         f.name(),
         f.reference().value,
@@ -121,15 +121,15 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             // Through two N the line fits exactly: no degree of freedom is left to measure the scatter
             // (chi2/dof), and the interval holds only the two points' own errors, not a curvature.
             // A standard error within rounding defines no weight: no interval.
-            Some(fit) if fit.interval().is_none() => println!(
+            Some(fit) if fit.interval().is_none() => outln!(
                 "{}: slope {:.3} (95% CI —, chi2/dof —: at one or more N the realizations differ by no more than f64 rounding (stderr about 0 there), as for an estimator with the same error for every shift or a few realizations that happen to agree; no interval. If the set is random, raise --realizations)",
                 s.sampler, fit.slope
             ),
-            Some(fit) if s.points.len() == 2 => println!(
+            Some(fit) if s.points.len() == 2 => outln!(
                 "{}: slope {:.3} (95% CI {:.3} .. {:.3} from the two points' errors alone, chi2/dof —: give three or more N to test the fit)",
                 s.sampler, fit.slope, fit.ci95.0, fit.ci95.1
             ),
-            Some(fit) => println!(
+            Some(fit) => outln!(
                 "{}: slope {:.3} (95% CI {:.3} .. {:.3}, chi2/dof {})",
                 s.sampler,
                 fit.slope,
@@ -138,19 +138,25 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
                 fit.chi2(s.points.len())
                     .map_or_else(|| "—".to_string(), |c| format!("{c:.2}"))
             ),
-            None => println!(
+            None => outln!(
                 "{}: no slope (a log-log fit needs two or more distinct N and a positive MSE at each)",
                 s.sampler
             ),
         }
-        println!(
+        outln!(
             "{:>8} {:>12} {:>10} {:>12}",
-            "N", "MSE", "stderr", "seconds(R)"
+            "N",
+            "MSE",
+            "stderr",
+            "seconds(R)"
         );
         for p in &s.points {
-            println!(
+            outln!(
                 "{:>8} {:>12.4e} {:>10.2e} {:>12.3}",
-                p.n, p.mse, p.mse_stderr, p.seconds
+                p.n,
+                p.mse,
+                p.mse_stderr,
+                p.seconds
             );
         }
     }

@@ -16,22 +16,22 @@ pub struct IntegrandsArgs {
 /// Prints the list, or the checked integrand.
 pub fn run(args: &IntegrandsArgs) -> Result<()> {
     let Some(spec) = &args.check else {
-        print!("{}", listing());
+        out!("{}", listing());
         return Ok(());
     };
     let f = parse(spec)?;
     let r = f.reference();
-    println!("integrand  {}", f.name());
-    println!("dims       {}", f.dims());
-    println!("integral   {:.17e} (± {:e})", r.value, r.stderr);
+    outln!("integrand  {}", f.name());
+    outln!("dims       {}", f.dims());
+    outln!("integral   {:.17e} (± {:e})", r.value, r.stderr);
     if let Some(v) = f.variance() {
-        println!("variance   {v:.10e} (of f over the domain)");
+        outln!("variance   {v:.10e} (of f over the domain)");
     } else if f.spectral_planes().is_none() {
         // A pixel of the scene: each evaluation traces rays; its variance is what converge measures.
-        println!("variance   unknown in closed form (measure it with `anisospec converge`)");
+        outln!("variance   unknown in closed form (measure it with `anisospec converge`)");
     } else {
         let m = estimate_mean_square(f.as_ref());
-        println!(
+        outln!(
             "variance   {:.6e} (± {:.1e}; of f over the domain, with ∫f² by randomized QMC: no closed form for overlapping terms)",
             m.value - r.value * r.value,
             m.stderr.hypot(2.0 * r.value * r.stderr)
@@ -40,13 +40,13 @@ pub fn run(args: &IntegrandsArgs) -> Result<()> {
     match f.spectral_planes() {
         Some(p) => {
             let names: Vec<String> = p.iter().map(|p| p.name()).collect();
-            println!(
+            outln!(
                 "spectrum   on the plane(s) {}; Fourier coefficients with error <= {:e}",
                 names.join(", "),
                 f.fourier_error()
             );
         }
-        None => println!(
+        None => outln!(
             "spectrum   spread over all {}D frequencies: use `anisospec converge`",
             f.dims()
         ),

@@ -1,5 +1,23 @@
 //! The command-line front end: one module per subcommand, each a clap `Args` struct and a `run`.
 
+/// `print!` for a command's results: a failed write to standard output (a full disk, a closed
+/// pipe) returns an error from the enclosing function instead of panicking ([`write_stdout`]).
+macro_rules! out {
+    ($($arg:tt)*) => {
+        $crate::cli::write_stdout(format_args!($($arg)*))?
+    };
+}
+
+/// `println!` for a command's results, as [`out!`].
+macro_rules! outln {
+    () => {
+        $crate::cli::write_stdout(format_args!("\n"))?
+    };
+    ($($arg:tt)*) => {
+        $crate::cli::write_stdout(format_args!("{}\n", format_args!($($arg)*)))?
+    };
+}
+
 pub mod compare;
 pub mod converge;
 pub mod gallery;
@@ -16,6 +34,19 @@ use crate::error::{Error, Result};
 use crate::points::shear::ShearMode;
 use crate::samplers::{self, Sampler};
 use std::path::{Path, PathBuf};
+
+/// Writes `text` to standard output; a failure is an I/O error naming standard output (a closed pipe
+/// among them: see [`Error::is_broken_pipe`]).
+pub fn write_stdout(text: std::fmt::Arguments) -> Result<()> {
+    use std::io::Write as _;
+    std::io::stdout()
+        .lock()
+        .write_fmt(text)
+        .map_err(|source| Error::Io {
+            context: "cannot write the results to standard output".into(),
+            source,
+        })
+}
 
 /// `--shear sx,sy` and `--shear-mode`: a constant shear of a 4D sampler's sets (sample, spectrum,
 /// converge; render's `--shear` is the per-pixel oracle's instead).

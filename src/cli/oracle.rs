@@ -48,7 +48,7 @@ pub fn run(args: &OracleArgs) -> Result<()> {
         crate::output::image::write_exr(&staged(exr), w, h, &channels)
     })?;
     let count = |c: PixelClass| oracle.iter().filter(|o| o.class == c).count();
-    println!(
+    outln!(
         "oracle of {w}x{h} pixels: {} in focus, {} hairline, {} double wedge; wrote {} and {}",
         count(PixelClass::InFocus),
         count(PixelClass::Hairline),

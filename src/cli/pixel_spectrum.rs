@@ -104,7 +104,7 @@ pub fn run(args: &PixelSpectrumArgs) -> Result<()> {
         );
         crate::output::image::write_png_described(&staged(png), [side, side], 1, &pixels, Some(key))
     })?;
-    println!(
+    outln!(
         "{} slice spectrum of pixel ({px}, {py}), K = {k}: wrote {}, {} and {} (the PNG: {})",
         proj.name(),
         npy.display(),

@@ -85,7 +85,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let start = Instant::now();
         let r = reference_of("reference image")?;
         write_image_pair(exr, png, w, h, &[("Y", &r.value), ("stderr", &r.stderr)])?;
-        println!(
+        outln!(
             "reference {w}x{h} at {} rays per pixel in {:.2} s (cached in {}); mean squared standard \
              error {:.3e}; wrote {} and {}",
             r.count,
@@ -127,7 +127,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     } else {
         "unsheared".into()
     };
-    println!(
+    outln!(
         "{name} {shear}, {} spp: MSE {:.4e} against the reference ({} rays per pixel, its own noise \
          {:.1e}); {:.2} s; wrote {} and {}",
         args.spp,

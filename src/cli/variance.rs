@@ -114,7 +114,7 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
         Some(m) => format!("max({}, {m}·N)", args.res),
         None => args.res.to_string(),
     };
-    println!(
+    outln!(
         "sampler {} on {} (planes {}, K = {grid}, R = {})",
         pred.sampler,
         pred.integrand,
@@ -125,18 +125,24 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
             .join(", "),
         args.realizations
     );
-    print!(
+    out!(
         "{:>7} {:>12} {:>10} {:>11}",
-        "N", "variance", "stderr", "tail"
+        "N",
+        "variance",
+        "stderr",
+        "tail"
     );
     for c in 0..args.cones {
-        print!(" {:>8}", format!("cone{c}%"));
+        out!(" {:>8}", format!("cone{c}%"));
     }
-    println!();
+    outln!();
     for p in &pred.points {
-        print!(
+        out!(
             "{:>7} {:>12.4e} {:>10.2e} {:>11.3e}",
-            p.n, p.variance, p.stderr, p.tail
+            p.n,
+            p.variance,
+            p.stderr,
+            p.tail
         );
         for c in &p.cones {
             let share = if p.grid > 0.0 {
@@ -144,17 +150,17 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
             } else {
                 0.0
             };
-            print!(" {share:>8.1}");
+            out!(" {share:>8.1}");
         }
-        println!();
+        outln!();
     }
     if let Some(fit) = &pred.fit {
         match fit.interval() {
-            Some((lo, hi)) => println!(
+            Some((lo, hi)) => outln!(
                 "predicted slope {:.3} (95% CI {lo:.3} .. {hi:.3})",
                 fit.slope
             ),
-            None => println!(
+            None => outln!(
                 "predicted slope {:.3} (95% CI —: at one or more N the realizations differ by no more than the spectrum method's own error (--eps, or f64 rounding with --exact), as for a set whose spectrum is the same for every shift (e.g. a lattice); no interval)",
                 fit.slope
             ),
@@ -164,12 +170,13 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
         if let Some(fit) = fit {
             let angle = c as f64 * 180.0 / args.cones as f64;
             if fit.errors_defined {
-                println!(
+                outln!(
                     "  cone {c} ({angle:.0}°) slope {:.3} ± {:.3}",
-                    fit.slope, fit.stderr
+                    fit.slope,
+                    fit.stderr
                 );
             } else {
-                println!("  cone {c} ({angle:.0}°) slope {:.3} ± —", fit.slope);
+                outln!("  cone {c} ({angle:.0}°) slope {:.3} ± —", fit.slope);
             }
         }
     }

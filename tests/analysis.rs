@@ -208,6 +208,17 @@ fn a_sheared_sampler_is_predicted_on_both_planes_and_in_both_modes() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("sheared twice"), "{err}");
+    // A shear of 0 moves no point: any integrand is predicted, with the unsheared sampler's bits.
+    let disc = parse("disc:r=0.3@xy").unwrap();
+    let zero =
+        samplers::Sheared::new(sampler("padded-mj", 4), 0.0, 0.0, ShearMode::Transported).unwrap();
+    let vc = VarianceConfig {
+        realizations: 8,
+        ..vc
+    };
+    let sheared = predict(&zero, disc.as_ref(), &[16], &vc).unwrap();
+    let plain = predict(sampler("padded-mj", 4).as_ref(), disc.as_ref(), &[16], &vc).unwrap();
+    assert_eq!(sheared.points[0].variance, plain.points[0].variance);
 }
 
 /// A shifted lattice has the same power spectrum for every shift, so its realizations' predictions

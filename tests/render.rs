@@ -336,6 +336,11 @@ fn bad_input_is_reported_with_exit_code_two() {
     assert!(e.to_string().contains("64x64"), "{e}");
     assert!(anisospec::render::parse_pixel_spec("px=3").is_err());
     assert!(anisospec::render::parse_pixel_spec("px=3,py=4,colour=red").is_err());
+    let e = anisospec::render::parse_pixel_spec("px=1,py=1,px=2")
+        .err()
+        .unwrap();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("key 'px' is given twice"), "{e}");
 
     let pinhole = write("pinhole.toml", "aperture = 0.0\n");
     let sc = Scene::load(Some(&pinhole)).unwrap();

@@ -1,7 +1,8 @@
 //! `anisospec integrands`: the integrand families, their keys, and (with `--check`) what a spec parses to.
 
 use crate::error::Result;
-use crate::integrands::{estimate_mean_square, parse, spec::listing};
+use crate::integrands::spec::{listing, names_a_pixel};
+use crate::integrands::{estimate_variance, parse};
 
 /// List the integrand families and their keys, or check one integrand spec.
 #[derive(Debug, clap::Args)]
@@ -26,15 +27,14 @@ pub fn run(args: &IntegrandsArgs) -> Result<()> {
     outln!("integral   {:.17e} (± {:e})", r.value, r.stderr);
     if let Some(v) = f.variance() {
         outln!("variance   {v:.10e} (of f over the domain)");
-    } else if f.spectral_planes().is_none() {
+    } else if names_a_pixel(spec) {
         // A pixel of the scene: each evaluation traces rays; its variance is what converge measures.
         outln!("variance   unknown in closed form (measure it with `anisospec converge`)");
     } else {
-        let m = estimate_mean_square(f.as_ref());
+        let v = estimate_variance(f.as_ref());
         outln!(
-            "variance   {:.6e} (± {:.1e}; of f over the domain, with ∫f² by randomized QMC: no closed form for overlapping terms)",
-            m.value - r.value * r.value,
-            m.stderr.hypot(2.0 * r.value * r.stderr)
+            "variance   {:.6e} (± {:.1e}; of f over the domain, by randomized QMC: no closed form for overlapping terms)",
+            v.value, v.stderr
         );
     }
     match f.spectral_planes() {

@@ -41,8 +41,9 @@ pub struct VarianceArgs {
     /// Frequency grid side K (even, at most 8192; with --shear at most 1024, as the integrand pulled
     /// back through the shear is sampled on 4K points per side) in each projection; the rest of the sum
     /// is estimated as white noise (Parseval: Var(f) less the grid's sum of |f̂|², over N) and reported
-    /// as the tail. Var(f) is exact, except for sums of overlapping shapes: there ∫f² is estimated by
-    /// randomized QMC (2^21 points), whose standard error enters the stderr column.
+    /// as the tail. Var(f) is exact, except for sums of overlapping shapes: there it is estimated by
+    /// randomized QMC (the mean of (f − ∫f)² over 2^21 points), whose standard error enters the
+    /// stderr column.
     #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub res: usize,
     /// Grow the grid with N: K = max(--res, M·N), with K² times the integrand's planes at most 8192².
@@ -154,8 +155,8 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
         }
         outln!();
     }
-    if let Some(fit) = &pred.fit {
-        match fit.interval() {
+    match &pred.fit {
+        Some(fit) => match fit.interval() {
             Some((lo, hi)) => outln!(
                 "predicted slope {:.3} (95% CI {lo:.3} .. {hi:.3})",
                 fit.slope
@@ -164,7 +165,10 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
                 "predicted slope {:.3} (95% CI —: at one or more N the realizations differ by no more than the spectrum method's own error (--eps, or f64 rounding with --exact), as for a set whose spectrum is the same for every shift (e.g. a lattice); no interval)",
                 fit.slope
             ),
-        }
+        },
+        None => outln!(
+            "no predicted slope (a log-log fit needs two or more distinct N and a positive variance at each)"
+        ),
     }
     for (c, fit) in pred.cone_fits.iter().enumerate() {
         if let Some(fit) = fit {

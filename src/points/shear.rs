@@ -38,7 +38,7 @@ impl ShearMode {
 }
 
 /// Below this magnitude a shear is the identity (the transport formulas divide by `s`).
-const NO_SHEAR: f64 = 1e-12;
+pub(crate) const NO_SHEAR: f64 = 1e-12;
 
 /// The largest shear magnitude accepted anywhere. `x = t − s u` cancels about `|s| · 1e-16` of `x`'s
 /// precision, so at `1e6` a sheared coordinate is still good to 1e-10; at `1e17` it is noise.

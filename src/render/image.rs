@@ -231,14 +231,15 @@ fn read_reference(file: &Path, pixels: usize, count: usize) -> Option<ReferenceI
 /// Mean over pixels of `(image − reference)²`.
 ///
 /// `image` and `reference` hold one value per pixel of the same scene, so they have the same length,
-/// which is at least 1 (scenes have 1 to 4096 pixels a side). A length mismatch panics in debug
-/// builds (in release only the common prefix is summed, still divided by `image.len()`); empty
-/// input gives NaN (0/0).
+/// which is at least 1 (scenes have 1 to 4096 pixels a side).
+///
+/// Panics if the lengths differ or the images are empty.
 pub fn mse(image: &[f64], reference: &[f64]) -> f64 {
-    debug_assert_eq!(
+    assert!(
+        image.len() == reference.len() && !image.is_empty(),
+        "mse needs two images of the same, nonzero number of pixels ({} and {})",
         image.len(),
-        reference.len(),
-        "image and reference sizes differ"
+        reference.len()
     );
     let sum: f64 = image
         .iter()

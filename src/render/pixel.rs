@@ -232,10 +232,15 @@ pub fn parse_pixel_spec(params: &str) -> Result<Box<dyn Integrand>> {
             "{m} in 'pixel:{body}'; write pixel:px=COLUMN,py=ROW[,scene=FILE][,refcount=N]"
         ))
     };
+    let mut seen: Vec<&str> = Vec::new();
     for part in body.split(',').filter(|p| !p.trim().is_empty()) {
         let (k, v) = part
             .split_once('=')
             .ok_or_else(|| usage(format!("'{part}' is not key=value")))?;
+        if seen.contains(&k.trim()) {
+            return Err(usage(format!("key '{}' is given twice", k.trim())));
+        }
+        seen.push(k.trim());
         let int = |v: &str| {
             v.trim()
                 .parse::<usize>()

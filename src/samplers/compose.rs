@@ -2,7 +2,7 @@
 
 use super::Sampler;
 use crate::error::{Error, Result};
-use crate::points::shear::{shear_set_4d, ShearMode, MAX_SHEAR};
+use crate::points::shear::{shear_set_4d, ShearMode, MAX_SHEAR, NO_SHEAR};
 use crate::rng::Rng;
 
 /// Which pairs of 4D dimensions receive the two 2D sets.
@@ -154,8 +154,9 @@ impl Sampler for Sheared {
         shear_set_4d(&mut set, self.sx, self.sy, self.mode);
         set
     }
+    /// `None` for a shear of 0 in both planes (magnitudes below [`NO_SHEAR`]), which moves no point.
     fn shear_frame(&self) -> Option<super::ShearFrame<'_>> {
-        Some(super::ShearFrame {
+        (self.sx.abs() >= NO_SHEAR || self.sy.abs() >= NO_SHEAR).then(|| super::ShearFrame {
             pattern: self.inner.as_ref(),
             sx: self.sx,
             sy: self.sy,

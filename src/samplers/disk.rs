@@ -184,7 +184,7 @@ pub const PROBES_PER_POINT: usize = 32;
 /// Relaxed blue noise: `N` uniform random points moved by [`LLOYD_ITERATIONS`] Lloyd iterations on
 /// the torus. Each iteration throws [`PROBES_PER_POINT`]` · N` fresh uniform probes, assigns each to
 /// its nearest point (kiddo periodic nearest-neighbour query) and moves every point to the toroidal
-/// centroid of its probes (the mean of the wrapped probe-to-point offsets). Any `N`.
+/// centroid of its probes (the mean of the wrapped probe-to-point offsets). Any `N` up to 2^18.
 #[derive(Clone, Debug)]
 pub struct Blue;
 

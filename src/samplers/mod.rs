@@ -58,7 +58,7 @@ pub trait Sampler: Send + Sync {
     /// For a sampler that shears the sets of another ([`Sheared`]): that sampler and the shear. The
     /// random shift moves the unsheared pattern, so the variance of DESIGN §4 holds in the pattern's
     /// frame, for the integrand pulled back through the shear ([`crate::variance::predict`]). `None`
-    /// for every other sampler.
+    /// for every other sampler, and for a shear of 0, which moves no point.
     fn shear_frame(&self) -> Option<ShearFrame<'_>> {
         None
     }

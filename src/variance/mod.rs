@@ -19,7 +19,7 @@
 use crate::converge::{check_plan, fit_power_law, SlopeFit};
 use crate::error::{Error, Result};
 use crate::integrands::sampled::sampled_power;
-use crate::integrands::{mean_square_reference, Integrand};
+use crate::integrands::{variance_reference, Integrand, Reference};
 use crate::points::shear::shear_pair;
 use crate::points::{project, Projection};
 use crate::rng;
@@ -67,11 +67,10 @@ pub struct VariancePoint {
     /// The sum over the frequency grid.
     pub grid: f64,
     /// The part beyond the grid (and below the `|f̂|²` threshold), estimated as
-    /// `(Var(f) − Σ_grid |f̂|²) / N`: white noise (`E[P] = 1`) there. `Var(f) = ∫f² − (∫f)²` in
-    /// closed form where the integrand has it, else with `∫f²` by randomized QMC
-    /// ([`crate::integrands::mean_square_reference`]).
+    /// `(Var(f) − Σ_grid |f̂|²) / N`: white noise (`E[P] = 1`) there. `Var(f)` in closed form where
+    /// the integrand has it, else by randomized QMC ([`crate::integrands::variance_reference`]).
     pub tail: f64,
-    /// Standard error of `tail`: 0 when `∫f²` and `∫f` are exact.
+    /// Standard error of `tail`: 0 when `Var(f)` is exact.
     pub tail_stderr: f64,
     /// The grid sum split by directional cone (sums to `grid`).
     pub cones: Vec<f64>,
@@ -491,13 +490,10 @@ pub fn predict_with_progress(
     let pattern = frame.as_ref().map_or(sampler, |fr| fr.pattern);
     // Before any work on f (a pixel's reference renders): the prediction needs f̂ on 2D planes.
     let planes = planes_of(f)?;
-    let (mean_square, integral) = (mean_square_reference(f), f.reference());
-    let var_f = f
-        .variance()
-        .unwrap_or(mean_square.value - integral.value.powi(2));
-    let var_f_stderr = mean_square
-        .stderr
-        .hypot(2.0 * integral.value * integral.stderr);
+    let Reference {
+        value: var_f,
+        stderr: var_f_stderr,
+    } = variance_reference(f);
     let mut points = Vec::with_capacity(ns.len());
     // Per N, the relative error of each realization's values ([`relative_error`]).
     let mut rho = Vec::with_capacity(ns.len());

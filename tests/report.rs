@@ -843,3 +843,66 @@ fn compare_rebuilds_a_corrupted_cached_table() {
     };
     assert_eq!(untimed(&check_report(&second, &ns)), untimed(&points));
 }
+
+/// A table whose sets stopped at the time limit is cached with that limit: a run with the same
+/// limit reuses it and warns once, a run with a longer limit rebuilds it (its sets then run their
+/// iterations), and the sidecar records what stopped them.
+#[test]
+fn a_table_cut_short_by_the_time_limit_is_rebuilt_under_a_longer_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let ns = [16, 64];
+    let short = study(&ns).replace("table_seconds = 600.0", "table_seconds = 1e-9");
+    // The sidecars of the cached tables, one per N.
+    let sidecars = || -> Vec<serde_json::Value> {
+        let found: Vec<serde_json::Value> = files_under(&cache.join("tables"))
+            .into_iter()
+            .filter(|f| f.extension().unwrap() == "json")
+            .map(|f| {
+                let text = std::fs::read_to_string(cache.join("tables").join(f)).unwrap();
+                serde_json::from_str(&text).unwrap()
+            })
+            .collect();
+        assert_eq!(found.len(), ns.len());
+        found
+    };
+    let run = |name: &str, config: &str| -> String {
+        let path = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&path, config).unwrap();
+        let out = dir.path().join(name);
+        let o = anisospec(&[
+            "compare",
+            "--config",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--cache",
+            cache.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{:?}: {err}", o.status.code());
+        err
+    };
+    run("short", &short);
+    for s in sidecars() {
+        assert_eq!(s["sets_stopped_by_time_limit"], 2);
+        assert_eq!(s["table_seconds"], 1e-9);
+    }
+    let again = run("again", &short);
+    assert_eq!(
+        again.matches("stopped at the time limit").count(),
+        ns.len(),
+        "{again}"
+    );
+    assert!(!again.contains("rebuilding"), "{again}");
+    let longer = run("longer", &study(&ns));
+    assert_eq!(
+        longer.matches("note: rebuilding the cached").count(),
+        ns.len(),
+        "{longer}"
+    );
+    for s in sidecars() {
+        assert_eq!(s["sets_stopped_by_time_limit"], 0);
+        assert_eq!(s["table_seconds"], 600.0);
+    }
+}

@@ -38,6 +38,9 @@ pub struct TableCache {
     sets: usize,
     seconds: f64,
     seed: u64,
+    /// Cached tables already warned about (sets stopped at the time limit), so that the warning
+    /// comes once per table however often the study uses it.
+    warned: std::sync::Mutex<Vec<PathBuf>>,
 }
 
 /// The shear whose frame a table for a subject with shears `range` is designed in: 0 when the range
@@ -128,6 +131,7 @@ impl TableCache {
             sets: config.table_sets,
             seconds: config.table_seconds,
             seed: config.seed,
+            warned: Default::default(),
         }
     }
 
@@ -171,7 +175,8 @@ impl TableCache {
         };
         // Everything the optimizer is given (its Debug text: target, strata, repulsion, Fourier
         // method, iteration budget, start, Latin hold) but the time limit, a safety net whose stops
-        // are warned about, so that a longer limit reuses the tables.
+        // are warned about, so that a longer limit reuses the tables (unless their sets stopped at
+        // a shorter one: see below).
         let key = format!(
             "{:?}|sets={}|seed={}|v8{sampling}",
             table_setup(target.clone(), n, 0.0),
@@ -188,11 +193,38 @@ impl TableCache {
         let meta = path.with_extension("json");
         if let (true, Ok(text)) = (path.is_file(), std::fs::read_to_string(&meta)) {
             if let Ok(m) = serde_json::from_str::<serde_json::Value>(&text) {
-                // A sidecar without its set-up time is as good as missing: rebuild.
+                // A sidecar without its set-up time is as good as missing: rebuild. So is a table
+                // whose sets stopped at a time limit shorter than this run's (or unrecorded): this
+                // run would let them go further.
+                let stopped = m["sets_stopped_by_time_limit"].as_u64().unwrap_or(0);
+                let limit = m["table_seconds"].as_f64();
+                let cut_short = stopped > 0 && limit.is_none_or(|l| l < self.seconds);
                 if let (true, Some(seconds)) = (m["key"] == key, m["seconds"].as_f64()) {
-                    match load_table(&path, n) {
-                        Ok(table) => return Ok((table, seconds)),
-                        Err(e) => eprintln!("warning: rebuilding an unreadable cached table: {e}"),
+                    if cut_short {
+                        eprintln!(
+                            "note: rebuilding the cached {} table at N = {n}: {stopped} of its sets stopped at the time limit ({}), and table_seconds is now {} s",
+                            source.display(),
+                            limit.map_or("not recorded".into(), |l| format!("{l} s")),
+                            self.seconds
+                        );
+                    } else {
+                        match load_table(&path, n) {
+                            Ok(table) => {
+                                let mut warned = self.warned.lock().expect("warned lock");
+                                if stopped > 0 && !warned.contains(&path) {
+                                    warned.push(path.clone());
+                                    eprintln!(
+                                        "warning: the cached {} table at N = {n} has {stopped} sets that stopped at the time limit ({} s); raise table_seconds to rebuild it further",
+                                        source.display(),
+                                        limit.unwrap_or(self.seconds)
+                                    );
+                                }
+                                return Ok((table, seconds));
+                            }
+                            Err(e) => {
+                                eprintln!("warning: rebuilding an unreadable cached table: {e}")
+                            }
+                        }
                     }
                 }
             }
@@ -213,9 +245,13 @@ impl TableCache {
                 (sets, timed_out, started.elapsed().as_secs_f64())
             }
         };
+        if timed_out > 0 {
+            // Warned about as it was built.
+            self.warned.lock().expect("warned lock").push(path.clone());
+        }
         let sidecar = serde_json::json!({
             "key": key, "seconds": seconds, "target": source.display().to_string(),
-            "sets_stopped_by_time_limit": timed_out,
+            "sets_stopped_by_time_limit": timed_out, "table_seconds": self.seconds,
         });
         // The table and its sidecar together, or neither.
         crate::output::write_group(&[&path, &meta], |staged| {

@@ -287,13 +287,20 @@ impl CompareConfig {
                     "{key} lists {which}; give each sampler once"
                 )));
             }
-            for sampler in &built {
-                for &n in &self.ns {
+            // Every N a sampler runs at: the study's, and the gallery's (spectra_n = 0 is refused
+            // below, with its own message).
+            let sizes = self
+                .ns
+                .iter()
+                .map(|&n| ("ns", n))
+                .chain((self.spectra_n > 0).then_some(("spectra_n", self.spectra_n)));
+            for (size_key, n) in sizes {
+                for sampler in &built {
                     let n = crate::samplers::usable_n(sampler.as_ref(), n);
                     // A size the sampler cannot make is the study's; a table file that cannot be
                     // read (a family's, read for this N) is the file's, named as it is.
                     crate::samplers::validate_n(sampler.as_ref(), n).map_err(|e| match e {
-                        Error::Usage(m) => Error::Usage(format!("ns: {m}")),
+                        Error::Usage(m) => Error::Usage(format!("{size_key}: {m}")),
                         other => other,
                     })?;
                 }
@@ -697,6 +704,28 @@ mod tests {
             ..CompareConfig::default_suite()
         };
         assert!(study.validate().is_ok());
+    }
+
+    /// The gallery's N is checked against every sampler before any work, naming its key (it failed
+    /// after the whole study was measured, naming none).
+    #[test]
+    fn a_gallery_size_a_sampler_cannot_make_is_refused_naming_spectra_n() {
+        let study = CompareConfig {
+            classical: vec!["lattice:1:3:5:7".into()],
+            spectra_n: 7,
+            ..CompareConfig::default_suite()
+        };
+        let e = study.validate().unwrap_err();
+        assert_eq!(e.exit_code(), 2, "{e}");
+        assert!(
+            e.to_string().starts_with("spectra_n: lattice:1:3:5:7"),
+            "{e}"
+        );
+        let fine = CompareConfig {
+            spectra_n: 64,
+            ..study
+        };
+        assert!(fine.validate().is_ok());
     }
 
     #[cfg(unix)]

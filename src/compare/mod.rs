@@ -267,12 +267,16 @@ pub fn subjects(config: &CompareConfig, cache_dir: &Path) -> Result<Vec<Subject>
 
 /// Runs the study and writes the report folder `out`, replacing an earlier report there. A bad config,
 /// an `out` or `cache_dir` that is (or lies under) a file, an `out` holding other files than an
-/// earlier report, and a `cache_dir` inside `out` are refused before any work.
+/// earlier report, a `cache_dir` inside `out`, and one where tables cannot be written (when the study
+/// builds tables) are refused before any work.
 pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outcome> {
     config.validate()?;
     crate::output::check_report_folder(out, REPORT_MARKER)?;
     check_cache_outside(cache_dir, out)?;
     crate::output::check_folder(cache_dir, "--cache", "cache")?;
+    if !config.tables.is_empty() {
+        tables::check_writable(cache_dir)?;
+    }
     let started = Instant::now();
     let subjects = subjects(config, cache_dir)?;
     let labels: Vec<String> = subjects.iter().map(|s| s.label.clone()).collect();

@@ -284,6 +284,25 @@ impl TableCache {
     }
 }
 
+/// Checks, before any work, that tables can be written into `cache_dir/tables` (made if missing): a
+/// folder that cannot be made or written in is a usage error naming it and the fix (a table is the
+/// study's set-up, and one that cannot be kept would be built again by every run).
+pub fn check_writable(cache_dir: &Path) -> Result<()> {
+    let dir = cache_dir.join("tables");
+    let refused = |e: std::io::Error| {
+        Error::Usage(format!(
+            "cannot write the optimized tables into the cache folder {}: {e}; give a folder you can write with --cache (or $ANISOSPEC_CACHE)",
+            dir.display()
+        ))
+    };
+    std::fs::create_dir_all(&dir).map_err(refused)?;
+    tempfile::Builder::new()
+        .prefix(".anisospec-")
+        .tempfile_in(&dir)
+        .map(drop)
+        .map_err(refused)
+}
+
 /// What a table of `target` at `n` points is optimized with, stopping after `seconds` per set at
 /// the latest.
 fn table_setup(target: Target, n: usize, seconds: f64) -> Setup {
@@ -330,6 +349,24 @@ pub fn check_buildable(target: Target, range: (f64, f64), n: usize) -> Result<()
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A cache whose `tables` cannot be a folder is refused as a usage error naming it and the fix;
+    /// a fresh one is made.
+    #[test]
+    fn a_cache_that_cannot_hold_tables_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let blocked = dir.path().join("blocked");
+        std::fs::create_dir(&blocked).unwrap();
+        std::fs::write(blocked.join("tables"), "a file").unwrap();
+        let e = check_writable(&blocked).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        let m = e.to_string();
+        assert!(m.contains("blocked/tables") && m.contains("--cache"), "{m}");
+        let fresh = dir.path().join("fresh");
+        check_writable(&fresh).unwrap();
+        assert!(fresh.join("tables").is_dir());
+        assert_eq!(std::fs::read_dir(fresh.join("tables")).unwrap().count(), 0);
+    }
 
     fn wedge(range: (f64, f64)) -> (f64, f64) {
         let shipped = Target::load(Path::new("targets/double-wedge.toml")).unwrap();

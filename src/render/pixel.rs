@@ -27,9 +27,12 @@ const REF_REPLICATES_MIN: usize = 32;
 /// Largest Sobol set sobol_burley supports.
 const SOBOL_MAX: usize = 1 << 16;
 
-/// The folder references are cached in: `$ANISOSPEC_CACHE` if set, else `out/cache`.
+/// The folder references are cached in: `$ANISOSPEC_CACHE` if set and not empty, else `out/cache`
+/// (an empty value is taken as unset, as shells often leave it).
 pub fn default_cache_dir() -> PathBuf {
-    std::env::var_os("ANISOSPEC_CACHE").map_or_else(|| PathBuf::from("out/cache"), PathBuf::from)
+    std::env::var_os("ANISOSPEC_CACHE")
+        .filter(|v| !v.is_empty())
+        .map_or_else(|| PathBuf::from("out/cache"), PathBuf::from)
 }
 
 /// Checks a reference count: a power of two from `2^10` to `2^24`.

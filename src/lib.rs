@@ -10,6 +10,7 @@ pub mod cli;
 pub mod compare;
 pub mod converge;
 pub mod error;
+pub mod exact_array;
 pub mod integrands;
 pub mod optimize;
 pub mod output;

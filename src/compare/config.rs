@@ -27,9 +27,11 @@ pub struct AnalyticEntry {
     /// The shear `(sx, sy)` an exact oracle gives for it (the centre of its shear range for a fan;
     /// with a double-wedge table listed, `[c, c]` for the range's centre `c`, unless the range holds
     /// 0).
+    #[serde(deserialize_with = "crate::exact_array::exactly")]
     pub shear: [f64; 2],
     /// The range of shears it holds, `[s_min, s_max]` (equal for a single edge); a double-wedge table
     /// is built for this range.
+    #[serde(deserialize_with = "crate::exact_array::exactly")]
     pub shear_range: [f64; 2],
 }
 

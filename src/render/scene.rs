@@ -82,6 +82,7 @@ pub struct SceneConfig {
     /// Vertical field of view, degrees.
     pub fov: f64,
     /// Camera (lens centre) position in world units; the camera always looks down `+z`, `+y` up.
+    #[serde(deserialize_with = "crate::exact_array::exactly")]
     pub position: [f64; 3],
     /// Focal distance `F`: depth (world units along `z` from the lens) of the plane in focus, in
     /// `(1e-3, 1e6)`.

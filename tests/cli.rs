@@ -3394,3 +3394,35 @@ fn an_unwritable_standard_output_is_an_error_not_a_panic() {
     assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "141", "{err}");
     assert!(err.is_empty(), "{err}");
 }
+
+/// A render or reference beyond 2^34 rays is refused before any work, naming the flag to lower.
+#[test]
+fn a_render_beyond_the_ray_budget_is_refused_at_once() {
+    let (dir, out) = tmp("big.exr");
+    let scene = dir.path().join("big.toml");
+    std::fs::write(&scene, "width = 4096\nheight = 4096\n").unwrap();
+    let scene = scene.to_str().unwrap();
+    let out_s = out.to_str().unwrap();
+    rejects(
+        &["render", "--scene", scene, "--reference", "-o", out_s],
+        "lower --ref-count",
+        &out,
+    );
+    rejects(
+        &[
+            "render",
+            "--scene",
+            scene,
+            "--ref-count",
+            "1024",
+            "--sampler",
+            "random",
+            "--spp",
+            "2048",
+            "-o",
+            out_s,
+        ],
+        "lower --spp",
+        &out,
+    );
+}

@@ -1,7 +1,7 @@
 //! `anisospec render`: the depth-of-field image with any 4D sampler, optionally sheared per pixel by
 //! the depth oracle, its MSE against a high-count reference, and the reference itself.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::points::shear::ShearMode;
 use crate::render::image::{
     mse, oracle_shears, reference_image, render_image, write_image_pair, WedgeShear,
@@ -25,7 +25,8 @@ pub struct RenderArgs {
     /// vector). Not used with --reference.
     #[arg(long, required_unless_present = "reference")]
     pub sampler: Option<String>,
-    /// Samples (rays) per pixel; must be a count the sampler allows (N × 4 at most 2^28 coordinates).
+    /// Samples (rays) per pixel; must be a count the sampler allows (N × 4 at most 2^28 coordinates),
+    /// and width × height × spp at most 2^34 rays.
     #[arg(long, default_value_t = 64, value_parser = crate::cli::parse_count, allow_negative_numbers = true)]
     pub spp: usize,
     /// Seed: pixel i uses stream i of it for its set and its toroidal shift.
@@ -47,7 +48,8 @@ pub struct RenderArgs {
     /// sampler's flags (--sampler, --spp, --seed, --shear) do not apply.
     #[arg(long, conflicts_with_all = ["sampler", "spp", "seed", "shear"])]
     pub reference: bool,
-    /// Rays per pixel of the reference (a power of two, 1024 to 16777216), in independent
+    /// Rays per pixel of the reference (a power of two, 1024 to 16777216; width × height × count at
+    /// most 2^34 rays), in independent
     /// Owen-scrambled Sobol sets whose spread gives its standard error. Every render computes the
     /// reference to report its MSE (the built-in 64x64 scene: about 45 s on 2 cores the first time),
     /// then reads it from the cache.
@@ -62,10 +64,32 @@ pub struct RenderArgs {
     pub output: PathBuf,
 }
 
+/// The most rays one image (the reference, or a render) may cast: 2^34, about 50 minutes on 2 cores
+/// (the built-in 64 x 64 scene's reference, 2^28 rays, takes about 45 s), and what the largest scene,
+/// 4096 x 4096, needs at the smallest --ref-count, 1024.
+pub const MAX_RAYS: u64 = 1 << 34;
+
+/// Refuses an image of `pixels` pixels at `per_pixel` rays each beyond [`MAX_RAYS`], naming the flag
+/// that sets `per_pixel`.
+fn check_rays(pixels: usize, per_pixel: usize, flag: &str) -> Result<()> {
+    let rays = (pixels as u64).saturating_mul(per_pixel as u64);
+    if rays > MAX_RAYS {
+        return Err(Error::Usage(format!(
+            "{pixels} pixels at {flag} {per_pixel} rays each is {rays:.3e} rays, more than the {MAX_RAYS:.3e} (2^34, about 50 minutes on 2 cores) one image may cast; lower {flag}, or the scene's width and height"
+        )));
+    }
+    Ok(())
+}
+
 /// Runs `anisospec render`.
 pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = Scene::load(args.scene.as_deref())?;
     let (w, h) = (scene.width(), scene.height());
+    // Every render computes (or reads) the reference; a render casts --spp rays per pixel too.
+    check_rays(w * h, args.ref_count, "--ref-count")?;
+    if !args.reference {
+        check_rays(w * h, args.spp, "--spp")?;
+    }
     let cache = args.cache.clone().unwrap_or_else(default_cache_dir);
     let mut inputs: Vec<PathBuf> = args.scene.iter().cloned().collect();
     inputs.extend(samplers::input_files(

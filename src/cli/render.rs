@@ -17,7 +17,8 @@ use std::time::Instant;
 /// Renders the scene and reports the image's MSE against the reference.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// TOML scene file overriding the built-in camera (width, height, fov, position, focus, aperture).
+    /// TOML scene file overriding the built-in camera (width, height, fov, position, focus, aperture);
+    /// a camera whose shears could pass 1e6 in magnitude is refused.
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// 4D sampler (see `anisospec samplers`), e.g. random, oa, sobol, padded-mj, xuyv-mj, or
@@ -33,7 +34,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_seed, allow_negative_numbers = true)]
     pub seed: u64,
     /// Shear each pixel's points by the depth oracle's shear in xu and yv (the scene needs an
-    /// aperture; a camera whose shears could pass 1e6 in magnitude is refused).
+    /// aperture).
     #[arg(long)]
     pub shear: bool,
     /// How --shear is applied (needs --shear): transported (seam-free inverse-CDF transport) or wrap
@@ -45,7 +46,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = WedgeShear::Centre, hide_possible_values = true)]
     pub wedge_shear: WedgeShear,
     /// Write the high-count reference image (channels Y and stderr) instead of a sampled one; the
-    /// sampler's flags (--sampler, --spp, --seed, --shear) do not apply.
+    /// sampler's flags (--sampler, --spp, --seed, --shear) are refused with it.
     #[arg(long, conflicts_with_all = ["sampler", "spp", "seed", "shear"])]
     pub reference: bool,
     /// Rays per pixel of the reference (a power of two, 1024 to 16777216; width × height × count at

@@ -491,7 +491,7 @@ impl CompareConfig {
         for path in &self.tables {
             let target = crate::targets::Target::load(path).map_err(|e| {
                 Error::Usage(format!(
-                    "table target {}: {e}; give the path of a target file such as targets/double-wedge.toml (paths are relative to the folder compare runs in)",
+                    "table target {}: {e}; tables = [...] lists target files, relative to the folder compare runs in (the default suite's are the targets/ of anisospec's own folder: run compare there, or give a --config whose tables name files that exist)",
                     path.display()
                 ))
             })?;

@@ -358,7 +358,13 @@ fn write_gallery(
             &[4, c.spectra_res, c.spectra_res],
             &all,
         )?;
-        written.push((spec.label(), file));
+        // A sampler that cannot make spectra_n is shown at its nearest N, as the panels say.
+        let label = if n == c.spectra_n {
+            spec.label()
+        } else {
+            format!("{} (N = {n})", spec.label())
+        };
+        written.push((label, file));
     }
     Ok(written)
 }
@@ -536,7 +542,7 @@ fn write_markdown(
         let (lo, hi) = GALLERY_SHEAR_RANGE;
         writeln!(
             w,
-            "Expected power spectra, N = {}, K = {}, {} realizations; whatever the integrands' shears, the sheared samplers and the tables are shown at the gallery's own shear 0.5, the tables framed for shears {lo} to {hi}. \
+            "Expected power spectra, N = {} (a sampler that cannot make it at its nearest N, marked), K = {}, {} realizations; whatever the integrands' shears, the sheared samplers and the tables are shown at the gallery's own shear 0.5, the tables framed for shears {lo} to {hi}. \
              log10 P from -2 (black) to 1 (white).\n",
             c.spectra_n, c.spectra_res, c.spectra_realizations
         )?;

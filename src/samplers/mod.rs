@@ -325,7 +325,7 @@ pub fn build(name: &str, dims: usize) -> Result<Box<dyn Sampler>> {
     }
     if name.trim().is_empty() {
         return Err(Error::Usage(
-            "the sampler name is empty; give one with --sampler NAME (`anisospec samplers` lists them)"
+            "the sampler name is empty; give a sampler's name (`anisospec samplers` lists them)"
                 .into(),
         ));
     }

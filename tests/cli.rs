@@ -1026,6 +1026,10 @@ fn compare_rejects_bad_numbers_and_clashing_names_before_any_work() {
             "'edge a' and 'edge-a' both make the file name 'edge_a'",
         ),
         (
+            |c| c.analytic[0].label = "!!!".into(),
+            "'!!!' has no letter or digit",
+        ),
+        (
             |c| c.classical = vec!["random".into(), "random".into()],
             "classical lists 'random' twice",
         ),

@@ -574,6 +574,11 @@ pub(crate) fn first_repeat<T: PartialEq>(list: &[T]) -> Option<&T> {
 pub fn check_file_names(labels: &[String], what: &str) -> Result<()> {
     for (i, a) in labels.iter().enumerate() {
         let slug = super::report::slug(a);
+        if slug.is_empty() {
+            return Err(Error::Usage(format!(
+                "{what}: '{a}' has no letter or digit, and the report names its files after them (plots/convergence_.png); give it a label with a letter or digit"
+            )));
+        }
         if let Some(b) = labels[..i].iter().find(|b| super::report::slug(b) == slug) {
             return Err(if a == b {
                 Error::Usage(format!(

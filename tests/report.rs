@@ -66,8 +66,8 @@ fn anisospec(args: &[&str]) -> Output {
 }
 
 /// Writes `config` to `dir/name.toml`, runs compare with the report in `dir/name` and the cache
-/// `cache`, and returns the report folder.
-fn compare(dir: &Path, name: &str, config: &str, cache: &Path) -> PathBuf {
+/// `cache`, expects success, and returns the report folder and compare's standard error.
+fn compare_logged(dir: &Path, name: &str, config: &str, cache: &Path) -> (PathBuf, String) {
     let path = dir.join(format!("{name}.toml"));
     std::fs::write(&path, config).unwrap();
     let out = dir.join(name);
@@ -80,13 +80,18 @@ fn compare(dir: &Path, name: &str, config: &str, cache: &Path) -> PathBuf {
         "--cache",
         cache.to_str().unwrap(),
     ]);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(
         o.status.success(),
-        "compare exited {:?}: {}",
-        o.status.code(),
-        String::from_utf8_lossy(&o.stderr)
+        "compare exited {:?}: {err}",
+        o.status.code()
     );
-    out
+    (out, err)
+}
+
+/// [`compare_logged`]'s report folder.
+fn compare(dir: &Path, name: &str, config: &str, cache: &Path) -> PathBuf {
+    compare_logged(dir, name, config, cache).0
 }
 
 /// Whether `stderr` can be the standard error of a mean `mse` of R = [`REALIZATIONS`] squared
@@ -866,23 +871,7 @@ fn a_table_cut_short_by_the_time_limit_is_rebuilt_under_a_longer_one() {
         assert_eq!(found.len(), ns.len());
         found
     };
-    let run = |name: &str, config: &str| -> String {
-        let path = dir.path().join(format!("{name}.toml"));
-        std::fs::write(&path, config).unwrap();
-        let out = dir.path().join(name);
-        let o = anisospec(&[
-            "compare",
-            "--config",
-            path.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--cache",
-            cache.to_str().unwrap(),
-        ]);
-        let err = String::from_utf8_lossy(&o.stderr).into_owned();
-        assert!(o.status.success(), "{:?}: {err}", o.status.code());
-        err
-    };
+    let run = |name: &str, config: &str| compare_logged(dir.path(), name, config, &cache).1;
     run("short", &short);
     for s in sidecars() {
         assert_eq!(s["sets_stopped_by_time_limit"], 2);

@@ -178,8 +178,11 @@ impl CompareConfig {
     /// values are input errors.
     pub fn load(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::read_input(path, e))?;
-        let config: Self =
-            toml::from_str(&text).map_err(|e| Error::Input(format!("{}: {e}", path.display())))?;
+        let config: Self = toml::from_str(&text).map_err(|e| {
+            let message = e.to_string();
+            let hint = misplaced_key_hint(&message).unwrap_or_default();
+            Error::Input(format!("{}: {}{hint}", path.display(), message.trim_end()))
+        })?;
         config.validate().map_err(|e| match e {
             Error::Usage(m) | Error::Input(m) => Error::Input(format!("{}: {m}", path.display())),
             other => other,
@@ -568,6 +571,19 @@ pub(crate) fn first_repeat<T: PartialEq>(list: &[T]) -> Option<&T> {
         .map(|(_, x)| x)
 }
 
+/// For a TOML error "unknown field `key`" where `key` is a key of the study itself: a hint that it
+/// stands inside an `[[analytic]]` entry (TOML puts every key after an `[[analytic]]` line into that
+/// entry, so a key appended to a printed config lands there).
+fn misplaced_key_hint(message: &str) -> Option<String> {
+    let key = message.split("unknown field `").nth(1)?.split('`').next()?;
+    let study = toml::Table::try_from(CompareConfig::default_suite()).ok()?;
+    (key != "analytic" && study.contains_key(key)).then(|| {
+        format!(
+            "\n`{key}` is a key of the study, not of an [[analytic]] entry: put it above the first [[analytic]] line (every key after that line belongs to the entry)"
+        )
+    })
+}
+
 /// Refuses two of `labels` (`what`, e.g. `samplers`) that are equal or that make the same file name
 /// in the report (which keeps only letters and digits: `edge a` and `edge-a` are both `edge_a`),
 /// naming both.
@@ -620,6 +636,26 @@ mod tests {
             let text = preset.to_toml().unwrap();
             assert_eq!(load_text(&text).unwrap(), preset, "{text}");
         }
+    }
+
+    /// A study key appended after an [[analytic]] entry (as to a printed config) is refused with a
+    /// hint that says where it goes; an unknown key gets no such hint.
+    #[test]
+    fn a_study_key_inside_an_entry_gets_a_hint() {
+        let printed = CompareConfig::default_suite().to_toml().unwrap();
+        let e = load_text(&format!("{printed}spectra_n = 64\n")).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        let m = e.to_string();
+        assert!(
+            m.contains("`spectra_n` is a key of the study")
+                && m.contains("above the first [[analytic]]"),
+            "{m}"
+        );
+        let m = load_text("bogus = 1\n").unwrap_err().to_string();
+        assert!(
+            m.contains("unknown field `bogus`") && !m.contains("key of the study"),
+            "{m}"
+        );
     }
 
     #[test]

@@ -292,13 +292,15 @@ impl CompareConfig {
                     "{key} lists {which}; give each sampler once"
                 )));
             }
-            // Every N a sampler runs at: the study's, and the gallery's (spectra_n = 0 is refused
-            // below, with its own message).
+            // Every N a sampler runs at: the study's, and the gallery's (a spectra_n of 0 or
+            // beyond the coordinate limit is refused below, with its own message).
+            let gallery_checked =
+                self.spectra_n > 0 && crate::points::coordinate_count(1, self.spectra_n, 4).is_ok();
             let sizes = self
                 .ns
                 .iter()
                 .map(|&n| ("ns", n))
-                .chain((self.spectra_n > 0).then_some(("spectra_n", self.spectra_n)));
+                .chain(gallery_checked.then_some(("spectra_n", self.spectra_n)));
             for (size_key, n) in sizes {
                 for sampler in &built {
                     let n = crate::samplers::usable_n(sampler.as_ref(), n);

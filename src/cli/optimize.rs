@@ -215,6 +215,12 @@ fn refuse_solver_flags(args: &OptimizeArgs) -> Result<()> {
 pub fn run(args: &OptimizeArgs) -> Result<()> {
     check_args(args)?;
     let target = Target::load(&args.target)?;
+    if matches!(&target, Target::Variance(v) if v.design() == Design::LatticeMixture) {
+        return Err(Error::Usage(format!(
+            "{} sets design = \"lattice-mixture\", whose sets are a mixture of lattices built by compare: list the target in a compare config's tables = [...]; optimize moves points (design = \"points\") or searches one lattice (design = \"lattice\")",
+            args.target.display()
+        )));
+    }
     let lattice_search = matches!(&target, Target::Variance(v) if v.design() == Design::Lattice);
     if lattice_search {
         refuse_solver_flags(args)?;

@@ -938,9 +938,11 @@ fn write_tables(
          a range that holds 0 it is designed in the frame of the in-focus layer and not moved; for any other \
          it is designed around the range's centre and moved by the samplers' shear (seam-free; see Integrands). A variance table is built once, for the integrand family \
          and shear its file names, and moved by each integrand's samplers' shear; with `design = \"lattice\"` its \
-         sets are the rank-1 lattice of lowest predicted variance, found by a search instead of the optimizer. \
+         sets are the rank-1 lattice of lowest predicted variance, found by a search instead of the optimizer; \
+         with `design = \"lattice-mixture\"` they are rank-1 lattices in the proportions whose worst predicted \
+         variance over the oracle's errors is lowest (a linear program). \
          Set-up is the optimization (or search) time recorded when the table was built, also when it is read \
-         back from the cache; a search's includes the whole computation of the spectrum it searches over, which \
+         back from the cache; a search's includes the whole computation of the spectra it searches over, which \
          one run computes once for every N.\n",
         c.table_sets
     )?;
@@ -986,12 +988,14 @@ fn write_tables(
                 let each: Vec<String> = starts.iter().map(|(n, s)| format!("N={n}: {s}")).collect();
                 each.join(", ")
             };
-            let lattice =
-                matches!(&framed, Ok(Target::Variance(v)) if v.design() == Design::Lattice);
-            let start = if lattice {
-                "rank-1 lattice search".to_string()
-            } else {
-                start
+            let start = match &framed {
+                Ok(Target::Variance(v)) if v.design() == Design::Lattice => {
+                    "rank-1 lattice search".to_string()
+                }
+                Ok(Target::Variance(v)) if v.design() == Design::LatticeMixture => {
+                    "mixture of rank-1 lattices".to_string()
+                }
+                _ => start,
             };
             let is_moved = framed.as_ref().is_ok_and(|t| moved(t, range));
             let moved_by = if !is_moved {

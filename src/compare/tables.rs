@@ -165,10 +165,14 @@ impl TableCache {
             Target::Variance(v) => format!(
                 "|sampling=v{}{}",
                 crate::targets::variance::SAMPLING_VERSION,
-                if v.design() == Design::Lattice {
-                    format!("|lattice-search={}", lattice_design::SEARCH_RES)
-                } else {
-                    String::new()
+                match v.design() {
+                    Design::Lattice => format!("|lattice-search={}", lattice_design::SEARCH_RES),
+                    Design::LatticeMixture => format!(
+                        "|lattice-mixture={},{}",
+                        lattice_design::SEARCH_RES,
+                        lattice_design::MIXTURE_ERRORS
+                    ),
+                    Design::Points => String::new(),
                 }
             ),
             _ => String::new(),
@@ -238,6 +242,13 @@ impl TableCache {
                 let design = lattice_design::design(v, n, 4)?;
                 let sets = PointSets::from_sets(4, vec![design.points(); self.sets])?;
                 (sets, 0, spectrum_seconds + started.elapsed().as_secs_f64())
+            }
+            Target::Variance(v) if v.design() == Design::LatticeMixture => {
+                // Each error's spectrum is computed once per process and shared by every N; each
+                // table is charged their whole computation, as a run at that N alone pays.
+                let mix = lattice_design::mixture(v, n, self.sets)?;
+                let sets = PointSets::new(self.sets, n, 4, mix.points())?;
+                (sets, 0, mix.seconds)
             }
             _ => {
                 let started = std::time::Instant::now();

@@ -24,6 +24,7 @@
 use crate::error::{Error, Result};
 use crate::samplers::lattice::{gcd, generating_vector, LATTICE_MAX_N};
 use crate::targets::Variance;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// Side of the `|ĝ|²` grid the search sums over (frequencies `−512 … 511` in each coordinate); the
@@ -111,14 +112,247 @@ pub fn design(target: &Variance, n: usize, dims: usize) -> Result<LatticeDesign>
 impl LatticeDesign {
     /// The lattice's points, `[n, dims]` row-major, at `((i z_d mod N) + ½) / N`.
     pub fn points(&self) -> Vec<f64> {
-        let n = self.n as u128;
-        (0..n)
-            .flat_map(|i| {
-                self.generator
-                    .iter()
-                    .map(move |&z| ((i * z as u128 % n) as f64 + 0.5) / n as f64)
-            })
+        lattice_points(self.n, &self.generator)
+    }
+}
+
+/// The points of the rank-1 lattice of `n` points with generator `z`, `[n, dims]` row-major, at
+/// `((i z_d mod N) + ½) / N`.
+pub fn lattice_points(n: usize, generator: &[usize]) -> Vec<f64> {
+    let n = n as u128;
+    (0..n)
+        .flat_map(|i| {
+            generator
+                .iter()
+                .map(move |&z| ((i * z as u128 % n) as f64 + 0.5) / n as f64)
+        })
+        .collect()
+}
+
+/// Shear errors a lattice mixture is designed over: this many, evenly spaced across
+/// `[−shear_error, shear_error]` (1.25 % apart at ±25 %).
+pub const MIXTURE_ERRORS: usize = 41;
+
+/// A mixture of rank-1 lattices (`design = "lattice-mixture"`): one generating vector per set,
+/// chosen so that the worst predicted variance over the shear's errors is lowest.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LatticeMixture {
+    /// Points per set.
+    pub n: usize,
+    /// The generating vector of each set, `(1, g, a, a g)` with the 2D multiplier `g` of the best
+    /// 2D lattice in `xy` and `uv`, and the set's own `a` in `xu` and `yv`.
+    pub generators: Vec<Vec<usize>>,
+    /// The relative errors of the shear the mixture was designed over.
+    pub errors: Vec<f64>,
+    /// Predicted variance of one estimate at each error (units of the integrand squared): the mean
+    /// over the sets of each lattice's `Σ |ĝ(k)|²` over its dual points on the search grid.
+    pub predicted_variance: Vec<f64>,
+    /// The lowest worst-case any mixture of these lattices in any proportions could have (the
+    /// linear program's optimum); the sets' worst is above it by the rounding to whole sets.
+    pub bound: f64,
+    /// Seconds the design took, with the whole first computation of its spectra (one process
+    /// computes them once and shares them, but each design is charged them).
+    pub seconds: f64,
+}
+
+impl LatticeMixture {
+    /// The worst predicted variance over the errors.
+    pub fn worst(&self) -> f64 {
+        self.predicted_variance.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// Every set's points, `[sets, n, 4]` row-major.
+    pub fn points(&self) -> Vec<f64> {
+        self.generators
+            .iter()
+            .flat_map(|z| lattice_points(self.n, z))
             .collect()
+    }
+}
+
+/// The mixture of `sets` rank-1 lattices of `n` points in 4D whose worst predicted variance for
+/// `target`'s family over [`MIXTURE_ERRORS`] errors of its shear is lowest (the target must have
+/// `design = "lattice-mixture"`, a nonzero shear and shear error).
+///
+/// For each error `e` the family's `|ĝ_e|²` (moved by `shear (1 + e)`, averaged over its placements)
+/// is summed over the dual lattice of every coprime multiplier `a` ([`dual_sum`]): the variance
+/// `V(e, a)` of DESIGN §4 for the lattice `(1, a)` in `xu` (and `yv`). A set drawn at random from a
+/// mixture with weights `w_a` has variance `Σ_a w_a V(e, a)`, linear in `w`, so the weights that
+/// minimize the worst error solve a linear program (microlp): minimize `t` subject to
+/// `Σ_a w_a V(e, a) ≤ t` for every `e`, `Σ w_a = 1`, `w ≥ 0`. The weights are then rounded to whole
+/// sets (largest remainders, ties to the smaller multiplier), and one set at a time is moved to
+/// another lattice while that lowers the worst (first improvement, multipliers in increasing
+/// order, at most `sets × 64` moves), so the result is deterministic.
+pub fn mixture(target: &Variance, n: usize, sets: usize) -> Result<LatticeMixture> {
+    mixture_over(target, n, sets, MIXTURE_ERRORS)
+}
+
+/// [`mixture`] over `count` (at least 2) errors.
+fn mixture_over(target: &Variance, n: usize, sets: usize, count: usize) -> Result<LatticeMixture> {
+    if !(2..=LATTICE_MAX_N).contains(&n) || sets == 0 {
+        return Err(Error::Usage(format!(
+            "a lattice mixture needs 2 to {LATTICE_MAX_N} points and at least one set (asked: {n} points, {sets} sets)"
+        )));
+    }
+    let spread = target.shear_error();
+    let errors: Vec<f64> = (0..count)
+        .map(|j| spread * (2.0 * j as f64 / (count - 1) as f64 - 1.0))
+        .collect();
+    let multipliers: Vec<usize> = (1..n).filter(|&a| gcd(a, n) == 1).collect();
+    let started = std::time::Instant::now();
+    // The spectra's full first computation, and the time this call waited for them.
+    let (mut spectra_seconds, mut waited) = (0.0, 0.0);
+    // v[j][i]: the variance at error j of the lattice with multiplier i.
+    let mut v = Vec::with_capacity(errors.len());
+    for e in &errors {
+        let member = Variance {
+            shear: target.shear * (1.0 + e),
+            shear_error: Some(0.0),
+            design: None,
+            ..target.clone()
+        };
+        let asked = std::time::Instant::now();
+        let (w, seconds) = member.spectrum_timed(SEARCH_RES)?;
+        spectra_seconds += seconds;
+        waited += asked.elapsed().as_secs_f64();
+        v.push(
+            multipliers
+                .par_iter()
+                .map(|&a| dual_sum(&w, SEARCH_RES, n, a))
+                .collect::<Vec<f64>>(),
+        );
+    }
+    let scale = v.iter().flatten().copied().fold(0.0, f64::max);
+    if scale <= 0.0 {
+        return Err(Error::Input(format!(
+            "target integrand '{}' has no energy on any lattice's dual points of the search grid: every lattice integrates it exactly, so there is nothing to design",
+            target.integrand
+        )));
+    }
+    let (weights, bound) = minimax_weights(&v, scale)?;
+    // From the rounded program's weights, or every set on the best single lattice if that is
+    // better: the mixture is never worse than one lattice.
+    let mut counts = whole_sets(&weights, sets);
+    let single = (0..multipliers.len())
+        .map(|i| {
+            let mut one = vec![0; multipliers.len()];
+            one[i] = sets;
+            one
+        })
+        .min_by(|a, b| worst_of(&v, a).total_cmp(&worst_of(&v, b)))
+        .expect("1 is coprime to every n");
+    if worst_of(&v, &single) < worst_of(&v, &counts) {
+        counts = single;
+    }
+    improve(&v, &mut counts);
+    let g = generating_vector(n, 2)[1];
+    let generators = counts
+        .iter()
+        .zip(&multipliers)
+        .flat_map(|(&c, &a)| {
+            std::iter::repeat_n(
+                vec![1, g, a, (a as u128 * g as u128 % n as u128) as usize],
+                c,
+            )
+        })
+        .collect();
+    Ok(LatticeMixture {
+        n,
+        generators,
+        errors,
+        predicted_variance: mixed(&v, &counts),
+        bound: bound.min(worst_of(&v, &counts)),
+        // The spectra's time counts in full even where this call found them computed.
+        seconds: started.elapsed().as_secs_f64() - waited + spectra_seconds,
+    })
+}
+
+/// The variance at each error of the mixture with `counts[i]` sets of lattice `i`.
+fn mixed(v: &[Vec<f64>], counts: &[usize]) -> Vec<f64> {
+    let sets: usize = counts.iter().sum();
+    v.iter()
+        .map(|row| {
+            row.iter()
+                .zip(counts)
+                .map(|(x, &c)| x * c as f64)
+                .sum::<f64>()
+                / sets as f64
+        })
+        .collect()
+}
+
+fn worst_of(v: &[Vec<f64>], counts: &[usize]) -> f64 {
+    mixed(v, counts).into_iter().fold(0.0, f64::max)
+}
+
+/// The weights over the lattices (columns of `v`) that minimize the worst row, and that worst, by
+/// the linear program of [`mixture`] on `v / scale` (values in `[0, 1]`).
+fn minimax_weights(v: &[Vec<f64>], scale: f64) -> Result<(Vec<f64>, f64)> {
+    use microlp::{ComparisonOp, OptimizationDirection, Problem};
+    let mut lp = Problem::new(OptimizationDirection::Minimize);
+    let columns = v[0].len();
+    let w: Vec<_> = (0..columns)
+        .map(|_| lp.add_var(0.0, (0.0, f64::INFINITY)))
+        .collect();
+    let t = lp.add_var(1.0, (0.0, f64::INFINITY));
+    for row in v {
+        let mut terms: Vec<_> = w.iter().zip(row).map(|(&x, &c)| (x, c / scale)).collect();
+        terms.push((t, -1.0));
+        lp.add_constraint(&terms, ComparisonOp::Le, 0.0);
+    }
+    let ones: Vec<_> = w.iter().map(|&x| (x, 1.0)).collect();
+    lp.add_constraint(&ones, ComparisonOp::Eq, 1.0);
+    let solution = lp.solve().map_err(|e| {
+        Error::Numerical(format!(
+            "the lattice mixture's linear program failed ({e}); use design = \"lattice\" instead"
+        ))
+    })?;
+    let weights = w.iter().map(|&x| solution[x].max(0.0)).collect();
+    Ok((weights, solution[t] * scale))
+}
+
+/// `weights` (summing to 1) as whole numbers of `sets`: the floors of `w·sets`, then one more set for
+/// the largest remainders (ties to the smaller index).
+fn whole_sets(weights: &[f64], sets: usize) -> Vec<usize> {
+    let want: Vec<f64> = weights.iter().map(|w| w * sets as f64).collect();
+    let mut counts: Vec<usize> = want.iter().map(|x| x.floor() as usize).collect();
+    let placed: usize = counts.iter().sum();
+    let mut order: Vec<usize> = (0..weights.len()).collect();
+    order.sort_by(|&i, &j| (want[j] - want[j].floor()).total_cmp(&(want[i] - want[i].floor())));
+    for &i in order.iter().take(sets.saturating_sub(placed)) {
+        counts[i] += 1;
+    }
+    counts
+}
+
+/// Moves one set at a time from its lattice to another while that lowers the worst row (the first
+/// such move in order of lattices; at most `sets × 64` moves).
+fn improve(v: &[Vec<f64>], counts: &mut [usize]) {
+    let total: usize = counts.iter().sum();
+    let sets = total as f64;
+    let mut current = mixed(v, counts);
+    let mut best = current.iter().copied().fold(0.0, f64::max);
+    for _ in 0..total * 64 {
+        let moved = (0..counts.len())
+            .filter(|&from| counts[from] > 0)
+            .flat_map(|from| (0..counts.len()).map(move |to| (from, to)))
+            .filter(|&(from, to)| from != to)
+            .find_map(|(from, to)| {
+                let worst = v
+                    .iter()
+                    .zip(&current)
+                    .map(|(row, c)| c + (row[to] - row[from]) / sets)
+                    .fold(0.0, f64::max);
+                // Only a clear improvement: no cycling on rounding.
+                (worst < best * (1.0 - 1e-12)).then_some((from, to))
+            });
+        let Some((from, to)) = moved else {
+            return;
+        };
+        counts[from] -= 1;
+        counts[to] += 1;
+        current = mixed(v, counts);
+        best = current.iter().copied().fold(0.0, f64::max);
     }
 }
 
@@ -197,6 +431,93 @@ mod tests {
             strata.sort_unstable();
             assert_eq!(strata, (0..n).collect::<Vec<_>>());
         }
+    }
+
+    /// The linear program finds the minimax mixture: with two errors and lattices costing
+    /// `[1, 0, 0.6]` and `[0, 1, 0.6]`, half of each of the first two (worst 0.5) beats the third
+    /// alone (0.6). Rounded to 3 sets (2 + 1, worst 2/3), one move gives one set of each (worst
+    /// 1.6/3), from which no single move lowers the worst.
+    #[test]
+    fn the_mixture_is_the_minimax_of_the_linear_program() {
+        let v = vec![vec![1.0, 0.0, 0.6], vec![0.0, 1.0, 0.6]];
+        let (w, worst) = minimax_weights(&v, 1.0).unwrap();
+        assert!((worst - 0.5).abs() < 1e-9, "{worst}");
+        assert!(
+            (w[0] - 0.5).abs() < 1e-9 && (w[1] - 0.5).abs() < 1e-9 && w[2] < 1e-9,
+            "{w:?}"
+        );
+        assert_eq!(whole_sets(&w, 4), vec![2, 2, 0]);
+        let mut counts = whole_sets(&w, 3);
+        assert_eq!(counts, vec![2, 1, 0]);
+        improve(&v, &mut counts);
+        assert_eq!(counts, vec![1, 1, 1]);
+        assert!((worst_of(&v, &counts) - 1.6 / 3.0).abs() < 1e-12);
+    }
+
+    /// A mixture for the xu edge of shear 0.5 at three errors (-25 %, 0, +25 %; the design uses
+    /// 41): each set is a lattice (1, g, a, a g), the predicted variance at each error is the mean
+    /// of the sets' dual sums over that error's spectrum, recomputed here, and the worst lies between
+    /// the program's bound and the best single lattice's worst.
+    #[test]
+    fn a_mixture_predicts_the_mean_of_its_lattices() {
+        let target = Variance {
+            integrand: "sheared:s=0.5,c=0.7".into(),
+            shear: 0.5,
+            placements: Some(0),
+            shear_error: Some(0.25),
+            extent: 3.0,
+            weight: None,
+            design: Some(crate::targets::variance::Design::LatticeMixture),
+        };
+        target.validate().unwrap();
+        let (n, sets) = (64, 8);
+        let mix = mixture_over(&target, n, sets, 3).unwrap();
+        assert_eq!(mix.errors, vec![-0.25, 0.0, 0.25]);
+        assert_eq!(mix.generators.len(), sets);
+        let g = generating_vector(n, 2)[1];
+        let spectra: Vec<_> = mix
+            .errors
+            .iter()
+            .map(|e| {
+                let member = Variance {
+                    shear: 0.5 * (1.0 + e),
+                    shear_error: Some(0.0),
+                    design: None,
+                    ..target.clone()
+                };
+                member.spectrum(SEARCH_RES).unwrap()
+            })
+            .collect();
+        for z in &mix.generators {
+            assert_eq!(z, &vec![1, g, z[2], z[2] * g % n]);
+            assert_eq!(gcd(z[2], n), 1);
+        }
+        for (w, predicted) in spectra.iter().zip(&mix.predicted_variance) {
+            let mean = mix
+                .generators
+                .iter()
+                .map(|z| dual_sum(w, SEARCH_RES, n, z[2]))
+                .sum::<f64>()
+                / sets as f64;
+            assert!(
+                (mean - predicted).abs() <= 1e-12 * predicted,
+                "{mean} {predicted}"
+            );
+        }
+        let single = (1..n)
+            .filter(|&a| gcd(a, n) == 1)
+            .map(|a| {
+                spectra
+                    .iter()
+                    .map(|w| dual_sum(w, SEARCH_RES, n, a))
+                    .fold(0.0, f64::max)
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            mix.bound <= mix.worst() && mix.worst() <= single,
+            "{mix:?} {single}"
+        );
+        assert_eq!(mix.points().len(), sets * n * 4);
     }
 
     #[test]

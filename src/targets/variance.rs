@@ -101,7 +101,18 @@ pub enum Design {
     /// variance is lowest ([`crate::optimize::lattice_design`]); `extent` then sets only the radius
     /// the fit is reported over, and `weight` does not apply.
     Lattice,
+    /// Sets that are rank-1 lattices of several generating vectors, mixed so that the worst
+    /// predicted variance over the shear's errors in `[−shear_error, shear_error]` is lowest
+    /// ([`crate::optimize::lattice_design::mixture`]): written `design = "lattice-mixture"`. Needs a
+    /// nonzero `shear` and `shear_error`; each error's family is averaged over `placements` (0: the
+    /// integrand as written), at most [`MAX_MIXTURE_PLACEMENTS`].
+    #[serde(rename = "lattice-mixture")]
+    LatticeMixture,
 }
+
+/// Most placements a lattice mixture's family may average per error: its spectrum is computed at
+/// every error of the mixture's grid, so the cost is that many times a single target's.
+pub const MAX_MIXTURE_PLACEMENTS: usize = 4;
 
 impl Variance {
     /// Checks the parameters: a 2D integrand that parses, a finite shear within
@@ -135,7 +146,15 @@ impl Variance {
                 crate::error::number(e)
             )));
         }
-        if e > 0.0 && (self.shear == 0.0 || self.placements() == 0) {
+        if self.design() == Design::LatticeMixture {
+            if self.shear == 0.0 || e == 0.0 || self.placements() > MAX_MIXTURE_PLACEMENTS {
+                return Err(Error::Input(format!(
+                    "design = \"lattice-mixture\" with shear {}, shear_error {e} and {} placements: a mixture is designed for the worst error of a nonzero shear, so give a nonzero 'shear' and 'shear_error', and at most {MAX_MIXTURE_PLACEMENTS} placements (0: the integrand as written)",
+                    self.shear,
+                    self.placements()
+                )));
+            }
+        } else if e > 0.0 && (self.shear == 0.0 || self.placements() == 0) {
             return Err(Error::Input(format!(
                 "target parameter 'shear_error' is {e} with shear {} and {} placements; an error of the shear needs a nonzero 'shear' to scale and at least one placement to draw it in (or leave 'shear_error' out)",
                 self.shear,
@@ -326,6 +345,27 @@ mod tests {
     /// coefficients) up to aliasing: over `|k1|, |k2| ≤ 8` the worst relative error is below the
     /// `max |k| / M` of the module doc at `M` = 256 and 1024 (measured 0.35 % and 0.04 %), and falls as
     /// `M` grows.
+    /// A lattice mixture needs a shear and a shear error to design for, and few placements.
+    #[test]
+    fn a_lattice_mixture_needs_a_shear_error_and_few_placements() {
+        let mixture = |shear: f64, error: f64, placements: usize| Variance {
+            shear,
+            shear_error: Some(error),
+            design: Some(Design::LatticeMixture),
+            ..target("sheared:s=0.5", 0.0, placements)
+        };
+        mixture(0.5, 0.25, 0).validate().unwrap();
+        for bad in [
+            mixture(0.0, 0.25, 0),
+            mixture(0.5, 0.0, 0),
+            mixture(0.5, 0.25, 5),
+        ] {
+            let e = bad.validate().unwrap_err();
+            assert_eq!(e.exit_code(), 2);
+            assert!(e.to_string().contains("lattice-mixture"), "{e}");
+        }
+    }
+
     #[test]
     fn sampled_spectrum_matches_exact_coefficients() {
         let spec_text = "fan:s0=0.3,s1=0.7,c=0.7";

@@ -295,9 +295,10 @@ impl TableCache {
     }
 }
 
-/// Checks, before any work, that tables can be written into `cache_dir/tables` (made if missing): a
-/// folder that cannot be made or written in is a usage error naming it and the fix (a table is the
-/// study's set-up, and one that cannot be kept would be built again by every run).
+/// Checks, before any work, that tables can be written into `cache_dir/tables` (made for the check
+/// if missing, and removed again): a folder that cannot be made or written in is a usage error
+/// naming it and the fix (a table is the study's set-up, and one that cannot be kept would be built
+/// again by every run).
 pub fn check_writable(cache_dir: &Path) -> Result<()> {
     let dir = cache_dir.join("tables");
     let refused = |e: std::io::Error| {
@@ -306,12 +307,19 @@ pub fn check_writable(cache_dir: &Path) -> Result<()> {
             dir.display()
         ))
     };
+    // The folders this check makes go again (innermost first, while empty): the tables that are
+    // written later make them for good.
+    let made: Vec<&Path> = dir.ancestors().take_while(|a| !a.exists()).collect();
     std::fs::create_dir_all(&dir).map_err(refused)?;
-    tempfile::Builder::new()
+    let probe = tempfile::Builder::new()
         .prefix(".anisospec-")
         .tempfile_in(&dir)
         .map(drop)
-        .map_err(refused)
+        .map_err(refused);
+    for folder in made {
+        let _ = std::fs::remove_dir(folder);
+    }
+    probe
 }
 
 /// What a table of `target` at `n` points is optimized with, stopping after `seconds` per set at
@@ -362,7 +370,7 @@ mod tests {
     use super::*;
 
     /// A cache whose `tables` cannot be a folder is refused as a usage error naming it and the fix;
-    /// a fresh one is made.
+    /// a fresh one passes and is left as it was, and a probe leaves no file.
     #[test]
     fn a_cache_that_cannot_hold_tables_is_refused() {
         let dir = tempfile::tempdir().unwrap();
@@ -375,7 +383,9 @@ mod tests {
         assert!(m.contains("blocked/tables") && m.contains("--cache"), "{m}");
         let fresh = dir.path().join("fresh");
         check_writable(&fresh).unwrap();
-        assert!(fresh.join("tables").is_dir());
+        assert!(!fresh.exists(), "the folders the check made go again");
+        std::fs::create_dir_all(fresh.join("tables")).unwrap();
+        check_writable(&fresh).unwrap();
         assert_eq!(std::fs::read_dir(fresh.join("tables")).unwrap().count(), 0);
     }
 

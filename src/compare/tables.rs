@@ -307,19 +307,18 @@ pub fn check_writable(cache_dir: &Path) -> Result<()> {
             dir.display()
         ))
     };
-    // The folders this check makes go again (innermost first, while empty): the tables that are
-    // written later make them for good.
-    let made: Vec<&Path> = dir.ancestors().take_while(|a| !a.exists()).collect();
-    std::fs::create_dir_all(&dir).map_err(refused)?;
-    let probe = tempfile::Builder::new()
+    // The folders this check makes go again when `made` drops (innermost first, while empty):
+    // the tables written later make them for good.
+    let mut made = crate::output::NewFolders::default();
+    made.make(&dir).map_err(|e| match e {
+        Error::Io { source, .. } => refused(source),
+        other => other,
+    })?;
+    tempfile::Builder::new()
         .prefix(".anisospec-")
         .tempfile_in(&dir)
         .map(drop)
-        .map_err(refused);
-    for folder in made {
-        let _ = std::fs::remove_dir(folder);
-    }
-    probe
+        .map_err(refused)
 }
 
 /// What a table of `target` at `n` points is optimized with, stopping after `seconds` per set at

@@ -337,12 +337,12 @@ fn left_staging(dest: &Path) -> Vec<PathBuf> {
 /// when this is dropped (innermost first, and only while empty), so a write that fails leaves no
 /// empty folder behind.
 #[derive(Default)]
-struct NewFolders(Vec<PathBuf>);
+pub(crate) struct NewFolders(Vec<PathBuf>);
 
 impl NewFolders {
     /// Makes `dest` and its missing ancestors, outermost first, and lists the folders this call
     /// made: one that exists already, or that another process makes first, is not listed.
-    fn make(&mut self, dest: &Path) -> Result<()> {
+    pub(crate) fn make(&mut self, dest: &Path) -> Result<()> {
         let mut chain: Vec<&Path> = dest
             .ancestors()
             .take_while(|a| !a.as_os_str().is_empty())

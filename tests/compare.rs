@@ -664,3 +664,21 @@ fn optimized_tables_on_the_renderer_pixels() {
     assert!(z > 3.0);
     assert!(z_sobol > -3.0);
 }
+
+/// The studies shipped in `targets/studies/` (the README's figures that the default suite does not
+/// make) load and pass every check compare makes before any work, their tables included, when run
+/// from the repository's root as their comments say.
+#[test]
+fn shipped_studies_load() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut loaded = Vec::new();
+    for entry in std::fs::read_dir(root.join("targets/studies")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let study = CompareConfig::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert!(!study.tables.is_empty(), "{}", path.display());
+            loaded.push(path);
+        }
+    }
+    assert_eq!(loaded.len(), 2, "{loaded:?}");
+}

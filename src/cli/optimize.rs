@@ -376,7 +376,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     for (f, term) in fits.iter().zip(&objective.terms) {
         match f.variance_ratio {
             Some(v) => eprintln!(
-                "{}: predicted variance {v:.4e} of random sampling's over the fit radius, |k| < {} (the frequencies the loss weighs), over {}",
+                "{}: predicted variance {v:.4e} of random sampling's over the fit radius, |k| <= {} (the frequencies the loss weighs), over {}",
                 f.proj,
                 number((term.grid.fit_radius * 10.0).round() / 10.0),
                 super::counted(f.sets, "set")

@@ -8,7 +8,7 @@ use crate::output::{write_atomic, write_folder, ReportMarker};
 use crate::points::Projection;
 use crate::samplers::{self, usable_n};
 use crate::spectrum::expected::of_sampler;
-use crate::spectrum::profiles::{radial_profile, write_radial_csv};
+use crate::spectrum::profiles::{dark_withheld_note, radial_profile, write_radial_csv};
 use crate::spectrum::{check_res, Method};
 use std::io::Write;
 use std::path::PathBuf;
@@ -109,6 +109,7 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
     write_folder(&gallery, GALLERY_MARKER, |dir| {
         let mut rows = Vec::new();
         let mut spectra = Vec::new();
+        let mut dark_noted = false;
         for &(name, dims, proj) in &jobs {
             let sampler = samplers::build(name, dims)?;
             let n = usable_n(sampler.as_ref(), args.n);
@@ -128,10 +129,14 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
                 dir.join(format!("{stem}.npy")),
             ];
             super::spectrum::write_spectrum(&spec, &outputs, &[ImageKind::Png, ImageKind::Npy])?;
-            write_radial_csv(
-                &dir.join(format!("{stem}_radial.csv")),
-                &radial_profile(&spec, 8, method),
-            )?;
+            let profile = radial_profile(&spec, 8, method);
+            write_radial_csv(&dir.join(format!("{stem}_radial.csv")), &profile)?;
+            if !dark_noted {
+                if let Some(note) = dark_withheld_note(&profile, method, n) {
+                    eprintln!("{note} (said once for the gallery)");
+                    dark_noted = true;
+                }
+            }
             eprintln!("{stem}: N = {n}, {:.2} s", started.elapsed().as_secs_f64());
             rows.push((sampler.name(), dims, proj.name(), n, stem));
             // Only the mean goes on the sheets: the rest is dropped now, not held for every sampler.

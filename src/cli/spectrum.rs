@@ -8,7 +8,7 @@ use crate::points::io::read_points;
 use crate::points::Projection;
 use crate::samplers;
 use crate::spectrum::expected::{of_sampler, of_sets, ExpectedSpectrum};
-use crate::spectrum::profiles::{radial_profile, write_radial_csv};
+use crate::spectrum::profiles::{dark_withheld_note, radial_profile, write_radial_csv};
 use crate::spectrum::{check_res, Method};
 use crate::stats::MAX_REALIZATIONS;
 use std::path::{Path, PathBuf};
@@ -190,17 +190,27 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
         }
         (None, None) => unreachable!("clap requires --sampler or --input"),
     };
+    let profile = args
+        .radial
+        .as_ref()
+        .map(|path| (path, radial_profile(&spec, args.cones, method)));
     crate::output::write_group(&outputs, |staged| {
         let images: Vec<PathBuf> = args.output.iter().map(|p| staged(p)).collect();
         write_spectrum(&spec, &images, &kinds)?;
         if let Some(path) = &args.stderr {
             write_npy(&staged(path), &[spec.res, spec.res], &spec.stderr)?;
         }
-        if let Some(path) = &args.radial {
-            write_radial_csv(&staged(path), &radial_profile(&spec, args.cones, method))?;
+        if let Some((path, profile)) = &profile {
+            write_radial_csv(&staged(path), profile)?;
         }
         Ok(())
     })?;
+    if let Some(note) = profile
+        .as_ref()
+        .and_then(|(_, profile)| dark_withheld_note(profile, method, spec.n))
+    {
+        eprintln!("{note}");
+    }
     let png_key = if kinds.contains(&ImageKind::Png) {
         format!(" (PNG: {})", crate::output::image::spectrum_png_key())
     } else {

@@ -153,6 +153,39 @@ pub fn radial_profile(spec: &ExpectedSpectrum, cones: usize, method: Method) -> 
         .collect()
 }
 
+/// Largest `(10 eps)² N` at which [`dark_withheld_note`] stays silent: a zero bin's NUFFT error
+/// bound below 1e-3 of white noise's `P = 1`, the level below which the accuracy contract stops.
+const QUIET_DARK_BOUND: f64 = 1e-3;
+
+/// A note for the user when the NUFFT's tolerance is too loose for `n` points to tell a dark annulus
+/// from a bright one: `(10 eps)² N` (the error a bin whose `P` is 0 can hold, [`precision`]) is above
+/// 1e-3 and `profile` withholds the anisotropy of some annulus whose mean is below it. It names the
+/// count and the fix (the largest `eps` whose bound is at most 1e-3, or `--exact`). `None` otherwise,
+/// and always for the exact DFT.
+pub fn dark_withheld_note(profile: &[RadialBin], method: Method, n: usize) -> Option<String> {
+    let Method::Nufft { eps } = method else {
+        return None;
+    };
+    let (dark, _) = precision(method, n, 0);
+    let withheld = profile
+        .iter()
+        .filter(|b| b.anisotropy_db.is_none() && b.mean <= dark)
+        .count();
+    if dark <= QUIET_DARK_BOUND || withheld == 0 {
+        return None;
+    }
+    let wanted = (QUIET_DARK_BOUND / n as f64).sqrt() / 10.0;
+    let suggested = 10f64
+        .powf(wanted.log10().floor())
+        .max(super::nufft::EPS_MIN);
+    Some(format!(
+        "note: at --eps {eps:e} with N = {n}, a bin whose P is 0 can read up to (10 eps)^2 N = {dark:.3} \
+         with the NUFFT (when every point's error adds up, as on a lattice), so the radial profile leaves \
+         the anisotropy out on {withheld} annuli whose mean is below that; for it, give --eps {suggested:e} \
+         or less, or --exact"
+    ))
+}
+
 /// Writes a radial profile as CSV: `r, r_normalized, mean, stderr, anisotropy_db` and one `cone_c` column
 /// per cone, headed with the cone's centre angle in degrees (an empty cell where a cone has no bin, in
 /// `stderr` from a single realization, and in `anisotropy_db` where it is undefined).
@@ -245,6 +278,37 @@ mod tests {
             assert!(of(&random)
                 .iter()
                 .all(|b| b.anisotropy_db.is_some_and(f64::is_finite)));
+        }
+    }
+
+    /// With the NUFFT at a tolerance too loose for N, every annulus of a spectrum near 1 is below the
+    /// error bound of a zero bin, `(10 eps)² N` (41 at eps = 1e-2, N = 4096): the anisotropy is
+    /// withheld and the note names the count and the largest eps that brings the bound to 1e-3
+    /// (1e-5: (1e-4)² · 4096 = 4.1e-5). A tolerance that fits N, and the exact DFT, give no note.
+    #[test]
+    fn a_loose_tolerance_is_noted_where_it_withholds_anisotropy() {
+        let (res, n) = (16, 4096);
+        let spec = ExpectedSpectrum {
+            res,
+            n,
+            realizations: 8,
+            mean: (0..res * res)
+                .map(|i| 1.0 + 0.1 * (i as f64).sin())
+                .collect(),
+            stderr: vec![0.1; res * res],
+        };
+        let loose = Method::Nufft { eps: 1e-2 };
+        let profile = radial_profile(&spec, 0, loose);
+        assert!(profile.iter().all(|b| b.anisotropy_db.is_none()));
+        let note = dark_withheld_note(&profile, loose, n).expect("a note");
+        assert!(
+            note.contains("on 7 annuli") && note.contains("--eps 1e-5 or less"),
+            "{note}"
+        );
+        for method in [Method::Nufft { eps: 1e-5 }, Method::Exact] {
+            let profile = radial_profile(&spec, 0, method);
+            assert!(profile.iter().all(|b| b.anisotropy_db.is_some()));
+            assert_eq!(dark_withheld_note(&profile, method, n), None);
         }
     }
 

@@ -34,6 +34,9 @@ const CHUNKS_PER_BATCH: usize = 16;
 /// Chunks per batch and thread: enough to balance the threads, few enough that the partial sums of
 /// a batch stay small on few threads.
 const CHUNKS_PER_THREAD: usize = 4;
+/// Bytes the partial sums of one batch may hold: at K = 8192 one chunk's sums are 537 MB, so a batch
+/// holds three chunks there (16 would be 8.6 GB); up to K = 4096 this allows all 16.
+const BATCH_BYTES: usize = 1 << 31;
 
 /// Averages the spectra of `realizations` projected point sets, `draw(r)` giving realization `r`.
 pub fn expected_spectrum<F>(
@@ -59,7 +62,9 @@ where
     let mut n = 0;
     // Batches bound the memory; their boundaries do not change the summation order (chunk by
     // chunk, in order), so their size may follow the thread count without changing the bits.
-    let per_batch = CHUNKS_PER_BATCH.min(CHUNKS_PER_THREAD * rayon::current_num_threads());
+    let per_batch = CHUNKS_PER_BATCH
+        .min(CHUNKS_PER_THREAD * rayon::current_num_threads())
+        .min((BATCH_BYTES / total.bytes()).max(1));
     let batch = CHUNK * per_batch;
     // The partial sums of each chunk of a batch (and its points per set), allocated once and
     // zeroed per batch: fresh vectors per chunk page-faulted on every batch (the allocator hands

@@ -171,6 +171,11 @@ impl PowerSums {
         }
     }
 
+    /// Bytes the two sums hold.
+    pub fn bytes(&self) -> usize {
+        (self.sum.len() + self.sum_sq.len()) * std::mem::size_of::<f64>()
+    }
+
     /// Sets both sums back to zero, keeping their memory.
     pub fn clear(&mut self) {
         self.sum.fill(0.0);

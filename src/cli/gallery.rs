@@ -163,12 +163,12 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
             writeln!(w, "{}\n", GALLERY_MARKER.first_line)?;
             writeln!(
                 w,
-                "{} realizations each, K = {}, NUFFT eps = {}, seed {}. PNG: log10 P from -2 (black) to 1 (white), \
-                 P = 1 (white noise) mid-grey, k1 horizontal, k2 up, k = 0 at the centre.\n",
+                "{} realizations each, K = {}, NUFFT eps = {}, seed {}. PNG: {}.\n",
                 args.realizations,
                 args.res,
                 crate::error::number(args.eps),
-                args.seed
+                args.seed,
+                crate::output::image::spectrum_png_key()
             )?;
             let sheets: Vec<String> = SHEETS
                 .iter()

@@ -119,7 +119,7 @@ pub fn spectrum_image_rows(values: &[f64], res: usize) -> Vec<f64> {
 pub const LOG_RANGE: (f64, f64) = (-2.0, 1.0);
 
 /// Grey level of a power value: `log10 P` mapped linearly from [`LOG_RANGE`] to 0..255, clamped.
-/// `P = 1` (white noise) is mid-grey.
+/// `P = 1` (white noise) is light grey, 170 of 255 (2/3 of the range).
 pub fn tone_map_log(p: f64) -> u8 {
     let (lo, hi) = LOG_RANGE;
     let l = if p > 0.0 { p.log10() } else { lo };
@@ -132,8 +132,10 @@ pub const SPECTRUM_PNG_MIN_SIDE: usize = 256;
 /// How a spectrum PNG reads: the tone map of [`tone_map_log`] and the frequency layout (ASCII).
 pub fn spectrum_png_key() -> String {
     format!(
-        "log10 P from {} (black) to {} (white); P = 1 (white noise) mid-grey; k1 right, k2 up, k = 0 at the centre",
-        LOG_RANGE.0, LOG_RANGE.1
+        "log10 P from {} (black) to {} (white); P = 1 (white noise) light grey ({} of 255); k1 right, k2 up, k = 0 at the centre",
+        LOG_RANGE.0,
+        LOG_RANGE.1,
+        tone_map_log(1.0)
     )
 }
 

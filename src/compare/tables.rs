@@ -110,11 +110,13 @@ pub fn within_reach(mut target: Target, n: usize) -> Result<Target> {
 /// The start of a table's sets: Owen-scrambled Sobol where `n` is a power of two (its xy is a
 /// (0,2)-net and its xu and yv keep part of their structure through the optimization: 5-15 % lower
 /// MSE than a padded PMJ02 start on the hairline edge with the shear off by 10-25 % at N = 1024, the
-/// same on the fan), else padded PMJ02 (xy and uv (0,2)-nets) where it allows `n`, else padded MJ.
+/// same on the fan; up to Sobol's largest N), else padded PMJ02 (xy and uv (0,2)-nets) where it
+/// allows `n`, else padded MJ.
 /// All are N-stratified in every coordinate.
 pub fn start_sampler(n: usize) -> &'static str {
+    let sobol = crate::samplers::build("sobol", 4).expect("a built-in sampler");
     let pmj = crate::samplers::build("padded-pmj02", 4).expect("a built-in sampler");
-    if n.is_power_of_two() {
+    if n.is_power_of_two() && sobol.check_n(n).is_ok() {
         "sobol"
     } else if pmj.check_n(n).is_ok() {
         "padded-pmj02"
@@ -359,6 +361,14 @@ fn load_table(path: &Path, n: usize) -> Result<Table> {
 /// Checks, without optimizing, that a table of `target` can be built at `n` points for a subject
 /// whose shears span `range`: the error [`TableCache::sampler`] would meet before its first iteration.
 pub fn check_buildable(target: Target, range: (f64, f64), n: usize) -> Result<()> {
+    // A lattice design or mixture has no start and no loss: its size limit, and the integrand's
+    // sampling at the search's grid.
+    if let Target::Variance(v) = &target {
+        if v.design() != Design::Points {
+            v.sampling_side(lattice_design::SEARCH_RES)?;
+            return lattice_design::check_n(n);
+        }
+    }
     let framed = within_reach(table_frame(target, range), n)?;
     table_setup(framed, n, 1.0).objective()?;
     crate::samplers::validate_n(crate::samplers::build(start_sampler(n), 4)?.as_ref(), n)
@@ -386,6 +396,25 @@ mod tests {
         std::fs::create_dir_all(fresh.join("tables")).unwrap();
         check_writable(&fresh).unwrap();
         assert_eq!(std::fs::read_dir(fresh.join("tables")).unwrap().count(), 0);
+    }
+
+    /// Above Sobol's largest N a power of two starts from padded PMJ02, so the table can be built; a
+    /// lattice design is checked against its own limit, not a start it does not use.
+    #[test]
+    fn tables_are_checked_with_what_builds_them() {
+        assert_eq!(start_sampler(1024), "sobol");
+        assert_eq!(start_sampler(1 << 17), "padded-pmj02");
+        let hairline = Target::load(Path::new("targets/hairline.toml")).unwrap();
+        check_buildable(hairline, (0.5, 0.5), 1 << 17).unwrap();
+        let lattice = Target::load(Path::new("targets/fan-lattice.toml")).unwrap();
+        check_buildable(lattice.clone(), (0.3, 0.7), 1 << 20).unwrap();
+        let m = check_buildable(lattice, (0.3, 0.7), (1 << 20) + 1)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            m.contains("a lattice design needs 2 to 1048576 points"),
+            "{m}"
+        );
     }
 
     fn wedge(range: (f64, f64)) -> (f64, f64) {

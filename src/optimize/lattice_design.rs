@@ -66,6 +66,17 @@ pub fn dual_sum(w: &[f64], res: usize, n: usize, a: usize) -> f64 {
     sum
 }
 
+/// Checks that a lattice design (or mixture) can have `n` points: `2 ..= LATTICE_MAX_N`, else
+/// `Error::Usage` naming N and the range.
+pub fn check_n(n: usize) -> Result<()> {
+    if !(2..=LATTICE_MAX_N).contains(&n) {
+        return Err(Error::Usage(format!(
+            "N = {n}: a lattice design needs 2 to {LATTICE_MAX_N} points"
+        )));
+    }
+    Ok(())
+}
+
 /// The lattice of lowest predicted variance for `target` with `n` points in `dims` (2 or 4)
 /// dimensions (see the module doc). Fails with `Error::Usage` for other dims or `n` outside
 /// `2 ..= LATTICE_MAX_N`, and with the target's own errors when its spectrum cannot be sampled.
@@ -75,11 +86,7 @@ pub fn design(target: &Variance, n: usize, dims: usize) -> Result<LatticeDesign>
             "--dims {dims}: a lattice design is 2D or 4D; use --dims 2 or --dims 4"
         )));
     }
-    if !(2..=LATTICE_MAX_N).contains(&n) {
-        return Err(Error::Usage(format!(
-            "-n {n}: a lattice design needs 2 to {LATTICE_MAX_N} points"
-        )));
-    }
+    check_n(n)?;
     let w = target.spectrum(SEARCH_RES)?;
     let h = SEARCH_RES / 2;
     let random: f64 = w.iter().sum::<f64>() - w[h * SEARCH_RES + h];

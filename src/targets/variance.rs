@@ -229,10 +229,10 @@ impl Variance {
         Ok(self.spectrum_timed(res)?.0)
     }
 
-    /// [`Variance::spectrum`] and the seconds its computation took, the first time this process
-    /// asked for it (the same figure on every later call, which reuses it): a set-up cost that every
-    /// design from this spectrum shares.
-    pub fn spectrum_timed(&self, res: usize) -> Result<(Arc<Vec<f64>>, f64)> {
+    /// The side `M` of the grid [`Variance::spectrum`] samples the integrand on for a `res × res`
+    /// loss grid, checked without sampling: `Error::Input` when `M` would exceed [`MAX_SAMPLES`] or
+    /// the placements' evaluations [`MAX_EVALUATIONS`].
+    pub fn sampling_side(&self, res: usize) -> Result<usize> {
         let samples = (4 * res).max(MIN_SAMPLES).next_power_of_two();
         if samples > MAX_SAMPLES {
             return Err(Error::Input(format!(
@@ -248,6 +248,14 @@ impl Variance {
                 self.placements()
             )));
         }
+        Ok(samples)
+    }
+
+    /// [`Variance::spectrum`] and the seconds its computation took, the first time this process
+    /// asked for it (the same figure on every later call, which reuses it): a set-up cost that every
+    /// design from this spectrum shares.
+    pub fn spectrum_timed(&self, res: usize) -> Result<(Arc<Vec<f64>>, f64)> {
+        let samples = self.sampling_side(res)?;
         type Memo = Mutex<HashMap<String, (Arc<Vec<f64>>, f64)>>;
         static MEMO: OnceLock<Memo> = OnceLock::new();
         let key = format!("{self:?}|{res}");

@@ -85,7 +85,7 @@ pub struct Evaluation {
 }
 
 /// The wrapped projection of a set whose coordinates may have left `[0, 1)`.
-fn projected(set: &[f64], dims: usize, proj: Projection) -> Vec<[f64; 2]> {
+pub(super) fn projected(set: &[f64], dims: usize, proj: Projection) -> Vec<[f64; 2]> {
     set.chunks_exact(dims)
         .map(|p| [wrap(p[proj.a]), wrap(p[proj.b])])
         .collect()

@@ -267,15 +267,7 @@ fn separate_duplicates(objective: &Objective, set: &mut [f64], rng: &mut Rng) ->
     let mut projs: Vec<Projection> = objective.terms.iter().map(|t| t.proj).collect();
     projs.dedup();
     for proj in projs {
-        let pts: Vec<[f64; 2]> = set
-            .chunks_exact(dims)
-            .map(|p| {
-                [
-                    crate::points::wrap(p[proj.a]),
-                    crate::points::wrap(p[proj.b]),
-                ]
-            })
-            .collect();
+        let pts = loss::projected(set, dims, proj);
         let tree: ImmutableKdTree<f64, 2> =
             ImmutableKdTree::new_from_slice(&pts).expect("finite points build a tree");
         for (i, p) in pts.iter().enumerate() {

@@ -313,6 +313,13 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             number(args.max_seconds)
         );
     }
+    let nudged = reports.iter().filter(|r| r.nudged).count();
+    if nudged > 0 {
+        eprintln!(
+            "note: {nudged} of {} starts had no gradient (a stationary point of the loss, as a lattice or a line of points is by symmetry), so their free coordinates were moved by up to 1e-3/sqrt(N) at random before optimizing (\"nudged\" in the sidecar)",
+            args.sets
+        );
+    }
 
     let mut fits = Vec::new();
     for term in &objective.terms {

@@ -250,6 +250,9 @@ pub struct SetReport {
     /// Points of the start that coincided with another in a constrained projection and were moved
     /// apart by a tiny random step (a duplicate has the same gradient as its twin and never leaves it).
     pub separated: usize,
+    /// Whether the start was a stationary point of the loss and every free coordinate was moved by
+    /// a tiny random step to leave it (see [`leave_stationary`]).
+    pub nudged: bool,
     /// Loss against iteration and time.
     #[serde(skip)]
     pub log: Vec<LogRow>,
@@ -301,6 +304,44 @@ fn latin_coords(dims: usize) -> Vec<usize> {
     }
 }
 
+/// Largest gradient, per unit of a coordinate and relative to the loss, at which a start counts as
+/// stationary. A start in general position has about `1 / sqrt(N)` (above 1e-3 up to N = 2^20); a
+/// lattice or a line, whose symmetry cancels the gradient, has rounding (or the NUFFT's error).
+const STATIONARY_GRADIENT: f64 = 1e-6;
+
+/// Moves `set` off a stationary point of the loss: where no free coordinate (not `frozen`) has a
+/// gradient above [`STATIONARY_GRADIENT`] times the loss while the loss is above 0, as at a rank-1
+/// lattice or a line of points (the solver would stop there at once, "converged", and hand the start
+/// back), each free coordinate moves by a uniform step of up to `1e-3 / sqrt(N)` drawn from `rng`.
+/// Returns whether it moved.
+fn leave_stationary(
+    objective: &Objective,
+    set: &mut [f64],
+    frozen: Option<&[bool]>,
+    rng: &mut Rng,
+) -> bool {
+    let at = objective.evaluate(set);
+    let is_free = |i: usize| frozen.is_none_or(|f| !f[i]);
+    let steepest = at
+        .gradient
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| is_free(i))
+        .map(|(_, g)| g.abs())
+        .fold(0.0, f64::max);
+    let any_free = (0..set.len()).any(is_free);
+    if !(any_free && at.loss > 0.0 && steepest <= STATIONARY_GRADIENT * at.loss) {
+        return false;
+    }
+    let step = 1e-3 / (objective.n as f64).sqrt();
+    for (i, c) in set.iter_mut().enumerate() {
+        if is_free(i) {
+            *c = crate::points::wrap(*c + step * (2.0 * rng.random::<f64>() - 1.0));
+        }
+    }
+    true
+}
+
 /// Optimizes one set from `start` (`[n, dims]`, in `[0,1)`), with the coordinates of `latin_coords` held (after
 /// [`latin::stratify`]) if `latin`. `rng` moves apart duplicate points. Fails with `Error::Numerical` if the start's loss is not finite.
 pub fn optimize_set(
@@ -340,6 +381,8 @@ pub fn optimize_set(
         latin::stratify(&mut set, n, dims, &coords);
         latin::frozen(n, dims, &coords)
     });
+    let nudged =
+        limits.max_iters > 0 && leave_stationary(objective, &mut set, frozen.as_deref(), rng);
     let out = solver::minimize(objective, &set, limits, frozen.as_deref());
     let report = SetReport {
         set: index,
@@ -353,6 +396,7 @@ pub fn optimize_set(
         stop: out.stop,
         fallback_used: out.fallback_used,
         separated,
+        nudged,
         log: out.log,
     };
     Ok((out.set, report))

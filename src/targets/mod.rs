@@ -9,7 +9,8 @@
 //! about `N` dark cells is what it can reach (N-rooks, for example, holds about `0.7 N` cells below `P = 0.1` along its two axes).
 //! [`Target::grid`] refuses targets darker than that and reports the reachable fraction. Sets that pay
 //! for darkness with peaks darken far more: a rank-1 lattice is dark everywhere but on its dual lattice,
-//! where `P = N` ([`crate::samplers::lattice`]).
+//! where `P = N` ([`crate::samplers::lattice`]). So a target that asks for peaks (an image, e.g. a
+//! measured spectrum) may darken `N` cells plus what it asks above `P = 1` inside its fit radius.
 //!
 //! File format (one table, `kind` picks the shape, unknown keys are errors):
 //!
@@ -556,6 +557,18 @@ impl Target {
         }
     }
 
+    /// What the target asks above `P = 1`, integrated over normalized frequency: its expected sum of
+    /// `T − 1` over the cells where `T > 1`, in units of `N` (an image's peaks; 0 for the shapes).
+    fn peak_area(&self) -> f64 {
+        match self {
+            Target::Image(i) => {
+                let excess: f64 = i.pixels.iter().map(|&v| (v - 1.0).max(0.0)).sum();
+                excess / i.pixels.len().max(1) as f64 * (2.0 * i.extent).powi(2)
+            }
+            _ => 0.0,
+        }
+    }
+
     /// The grid the fit is judged on: twice the fit radius of [`Target::grid`], so that energy pushed
     /// just beyond the optimized range is seen (a variance target: at most the radius its largest
     /// sampling grid allows, [`variance::MAX_SAMPLES`]` / 8 − 1` cells).
@@ -589,8 +602,8 @@ impl Target {
         }
         // Refuse hopeless targets before laying out a grid that may not fit in memory.
         let estimate = self.dark_area() * n as f64;
-        if estimate > 4.0 * REACH * n as f64 {
-            return Err(self.beyond_reach(n, estimate));
+        if estimate > 4.0 * (REACH + self.peak_area()) * n as f64 {
+            return Err(self.beyond_reach(n, estimate, 0.0));
         }
         let sqrt_n = (n as f64).sqrt();
         let largest = (crate::spectrum::MAX_RES / 2 - 1) as f64;
@@ -626,9 +639,14 @@ impl Target {
         if dark_cells == 0 {
             return Err(self.nothing_dark(n));
         }
-        let reach = REACH * n as f64;
-        if dark_cells as f64 > reach {
-            return Err(self.beyond_reach(n, dark_cells as f64));
+        // Peaks pay for darkness: what the target asks above P = 1 inside the fit radius (an image's
+        // peaks; 0 for the shapes) adds to the cells N points can darken.
+        let surplus: f64 = (0..res * res)
+            .filter(|&idx| inside[idx])
+            .map(|idx| (target[idx] - 1.0).max(0.0))
+            .sum();
+        if dark_cells as f64 > REACH * n as f64 + surplus {
+            return Err(self.beyond_reach(n, dark_cells as f64, surplus));
         }
         // The rim: non-dark cells next to a dark one (8-neighbourhood), where the energy pushed out of
         // the dark region piles up first. They get the dark cells' weight.
@@ -750,8 +768,17 @@ impl Target {
         ))
     }
 
-    fn beyond_reach(&self, n: usize, dark_cells: f64) -> Error {
-        let reach = REACH * n as f64;
+    fn beyond_reach(&self, n: usize, dark_cells: f64, surplus: f64) -> Error {
+        let reach = REACH * n as f64 + surplus;
+        let paid = if surplus > 0.0 {
+            format!(
+                " ({} for its N, and {} that its peaks above P = 1 pay for)",
+                number((REACH * n as f64).round()),
+                number(surplus.round())
+            )
+        } else {
+            String::new()
+        };
         let fix = match self {
             Target::Hairline(_) => {
                 "shorten length, or lower half_width, opening or inner_radius".to_string()
@@ -768,7 +795,7 @@ impl Target {
             Target::Variance(_) => unreachable!("a variance target has no dark region"),
         };
         Error::Input(format!(
-            "the {} target darkens {} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}: reachable fraction {}. Shrink its dark region by that factor in area: {fix}",
+            "the {} target darkens {} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}{paid}: reachable fraction {}. Shrink its dark region by that factor in area: {fix}",
             self.kind(),
             number(dark_cells.round()),
             crate::output::plot::short_number(reach / dark_cells)
@@ -1031,5 +1058,39 @@ mod tests {
         let too_dark = Target::parse("kind = \"blue-noise\"\nradius = 2\n").unwrap();
         let e = too_dark.grid(256).unwrap_err().to_string();
         assert!(e.contains("reachable fraction"), "{e}");
+    }
+
+    /// An image dark on its whole disc (about 800 cells at N = 256, extent 1) is beyond N's reach,
+    /// unless it asks for peaks that pay for it, as a lattice's spectrum does: four cells of P = 250
+    /// add 4 × 249 to the 256 cells N points darken alone.
+    #[test]
+    fn peaks_pay_for_darkness() {
+        let image = |peak: f64| {
+            let m = 32;
+            let mut pixels = vec![0.0; m * m];
+            for (i, j) in [(16, 24), (16, 8), (24, 16), (8, 16)] {
+                pixels[i * m + j] = peak;
+            }
+            Target::Image(Image {
+                file: PathBuf::from("measured.npy"),
+                extent: 1.0,
+                dark_weight: None,
+                falloff: None,
+                pixels,
+                shape: [m, m],
+            })
+        };
+        let e = image(1.0).grid(256).unwrap_err().to_string();
+        assert!(
+            e.contains("can darken only about 256:") && e.contains("reachable fraction"),
+            "{e}"
+        );
+        let e = image(150.0).grid(256).unwrap_err().to_string();
+        assert!(
+            e.contains("about 852 (256 for its N, and 596 that its peaks above P = 1 pay for)"),
+            "{e}"
+        );
+        let grid = image(250.0).grid(256).unwrap();
+        assert!(grid.dark_cells > 256 + 500, "{}", grid.dark_cells);
     }
 }

@@ -129,6 +129,7 @@ fn check_needs(matches: &ArgMatches) -> anisospec::error::Result<()> {
 
 fn main() -> ExitCode {
     let matches = Cli::command().get_matches();
+    anisospec::output::interrupt::remove_temporaries_on_interrupt();
     let result = check_needs(&matches).and_then(|()| {
         let args = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
         run(&args.command)

@@ -4,6 +4,7 @@
 //! writing leaves none of the new files.
 
 pub mod image;
+pub mod interrupt;
 pub mod plot;
 pub mod sheet;
 
@@ -47,6 +48,7 @@ where
     let mut tmp = builder
         .tempfile_in(dir)
         .map_err(|e| Error::io("create a file in", dir, os_error(&e)))?;
+    let _registered = interrupt::Temporary::new(tmp.path());
     {
         let mut w = BufWriter::new(tmp.as_file_mut());
         fill(&mut w)
@@ -71,7 +73,7 @@ pub fn write_group<T>(
 ) -> Result<T> {
     // Declared before the temporary folders, so dropped after them: the folders made go once empty.
     let mut made = NewFolders::default();
-    let mut folders: Vec<(PathBuf, tempfile::TempDir)> = Vec::new();
+    let mut folders: Vec<(PathBuf, Staging)> = Vec::new();
     let mut staged: Vec<(PathBuf, PathBuf)> = Vec::new();
     for out in outputs {
         let dir = folder_of(out).to_path_buf();
@@ -114,7 +116,7 @@ pub fn write_group<T>(
 /// nothing was written. Should putting one back fail too, the kept files stay in their folder and
 /// the error names it.
 fn commit(written: &[&(PathBuf, PathBuf)]) -> Result<()> {
-    let mut asides: Vec<(PathBuf, tempfile::TempDir)> = Vec::new();
+    let mut asides: Vec<(PathBuf, Staging)> = Vec::new();
     let mut kept: Vec<Option<PathBuf>> = Vec::with_capacity(written.len());
     for (out, _) in written {
         if out.symlink_metadata().is_err() {
@@ -376,7 +378,7 @@ impl Drop for NewFolders {
 /// The temporary folder of `folders` inside `dir`, made by [`staging_folder`] the first time `dir`
 /// is asked for.
 fn folder_for<'a>(
-    folders: &'a mut Vec<(PathBuf, tempfile::TempDir)>,
+    folders: &'a mut Vec<(PathBuf, Staging)>,
     made: &mut NewFolders,
     dir: PathBuf,
 ) -> Result<&'a Path> {
@@ -393,12 +395,35 @@ fn folder_for<'a>(
 
 /// A temporary folder inside `dir` (created if missing, and listed in `made`), on the file system of
 /// the outputs.
-fn staging_folder(dir: &Path, made: &mut NewFolders) -> Result<tempfile::TempDir> {
+fn staging_folder(dir: &Path, made: &mut NewFolders) -> Result<Staging> {
     made.make(dir)?;
-    tempfile::Builder::new()
+    let folder = tempfile::Builder::new()
         .prefix(".anisospec-")
         .tempdir_in(dir)
-        .map_err(|e| Error::io("create a folder in", dir, os_error(&e)))
+        .map_err(|e| Error::io("create a folder in", dir, os_error(&e)))?;
+    Ok(Staging {
+        _registered: interrupt::Temporary::new(folder.path()),
+        folder,
+    })
+}
+
+/// A temporary folder of this crate, removed when dropped (as `tempfile::TempDir`) and, while it
+/// lives, on an interrupt ([`interrupt`]).
+struct Staging {
+    folder: tempfile::TempDir,
+    // Dropped after the folder: the register never lists a folder already gone.
+    _registered: interrupt::Temporary,
+}
+
+impl Staging {
+    fn path(&self) -> &Path {
+        self.folder.path()
+    }
+
+    /// Keeps the folder (no longer removed, on drop or on an interrupt) and returns its path.
+    fn keep(self) -> PathBuf {
+        self.folder.keep()
+    }
 }
 
 fn folder_in_the_way(out: &Path) -> Error {

@@ -3474,3 +3474,47 @@ fn an_interrupted_write_leaves_nothing_behind() {
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
     assert!(left.is_empty(), "{left:?}");
 }
+
+/// The shipped targets that need no image are built in: run from a folder with no `targets/`, a
+/// shipped path is read from the binary (compare's default suite names its tables so), while the
+/// image target, which needs its npy beside it, is still refused as missing, and a file of the user's
+/// at a shipped path is read instead of the built-in copy.
+#[test]
+fn shipped_targets_are_built_in() {
+    let dir = tempfile::tempdir().unwrap();
+    let optimize = |target: &str| {
+        Command::new(env!("CARGO_BIN_EXE_anisospec"))
+            .args([
+                "optimize",
+                "--target",
+                target,
+                "-n",
+                "16",
+                "--max-iters",
+                "1",
+            ])
+            .args(["-o", "t.npy"])
+            .current_dir(dir.path())
+            .output()
+            .unwrap()
+    };
+    for target in ["targets/hairline.toml", "./targets/fan-variance.toml"] {
+        let o = optimize(target);
+        assert!(
+            o.status.success(),
+            "{target}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    let o = optimize("targets/image-ellipse.toml");
+    assert_eq!(o.status.code(), Some(2));
+    std::fs::create_dir(dir.path().join("targets")).unwrap();
+    std::fs::write(
+        dir.path().join("targets/hairline.toml"),
+        "kind = \"mine\"\n",
+    )
+    .unwrap();
+    let o = optimize("targets/hairline.toml");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.code() == Some(2) && err.contains("mine"), "{err}");
+}

@@ -59,7 +59,9 @@ pub struct CompareConfig {
     pub sheared: Vec<String>,
     /// How the oracle's shear is applied to `sheared`.
     pub shear_modes: Vec<ShearMode>,
-    /// Optimized tables: target files, built for each N when missing from the cache.
+    /// Optimized tables: target files (relative to the folder compare runs in; a shipped
+    /// `targets/NAME.toml` with no file there is read from the binary), built for each N when
+    /// missing from the cache.
     pub tables: Vec<PathBuf>,
     /// Sets per optimized table (each use picks one and shifts it at random).
     pub table_sets: usize,
@@ -496,7 +498,7 @@ impl CompareConfig {
         for path in &self.tables {
             let target = crate::targets::Target::load(path).map_err(|e| {
                 Error::Usage(format!(
-                    "table target {}: {e}; tables = [...] lists target files, relative to the folder compare runs in (the default suite's are the targets/ of anisospec's own folder: run compare there, or give a --config whose tables name files that exist)",
+                    "table target {}: {e}; tables = [...] lists target files, relative to the folder compare runs in (the shipped targets/*.toml are also built in, read from the binary where no such file exists); give files that exist",
                     path.display()
                 ))
             })?;

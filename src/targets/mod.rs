@@ -324,9 +324,14 @@ fn falloff(a: Option<f64>) -> Result<f64> {
 
 impl Target {
     /// Reads and checks a target file. Unknown keys, non-finite numbers, negative widths and radii,
-    /// `s0 > s1` and unreadable images are errors (`Error::Input`) naming the problem.
+    /// `s0 > s1` and unreadable images are errors (`Error::Input`) naming the problem. A shipped
+    /// target's path (`targets/hairline.toml`, ...) with no file there is read from the copy built
+    /// into the binary ([`BUILT_IN`]).
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::read_input(path, e))?;
+        let text = match built_in(path) {
+            Some(text) if !path.exists() => text.to_string(),
+            _ => std::fs::read_to_string(path).map_err(|e| Error::read_input(path, e))?,
+        };
         let mut target = Self::parse(&text).map_err(|e| match e {
             Error::Input(m) => Error::Input(format!("{}: {m}", path.display())),
             other => other,
@@ -801,6 +806,54 @@ impl Target {
             crate::output::plot::short_number(reach / dark_cells)
         ))
     }
+}
+
+/// The shipped targets that need no other file, built into the binary under their paths in the
+/// repository: [`Target::load`] reads one of these paths that does not exist from here, so the
+/// default compare suite (whose tables are `targets/*.toml`) runs from any folder. A file at the
+/// path is read instead.
+const BUILT_IN: [(&str, &str); 8] = [
+    (
+        "targets/blue-noise.toml",
+        include_str!("../../targets/blue-noise.toml"),
+    ),
+    (
+        "targets/double-wedge.toml",
+        include_str!("../../targets/double-wedge.toml"),
+    ),
+    (
+        "targets/edge-lattice-mixture.toml",
+        include_str!("../../targets/edge-lattice-mixture.toml"),
+    ),
+    (
+        "targets/edge-robust.toml",
+        include_str!("../../targets/edge-robust.toml"),
+    ),
+    (
+        "targets/fan-lattice.toml",
+        include_str!("../../targets/fan-lattice.toml"),
+    ),
+    (
+        "targets/fan-variance.toml",
+        include_str!("../../targets/fan-variance.toml"),
+    ),
+    (
+        "targets/hairline.toml",
+        include_str!("../../targets/hairline.toml"),
+    ),
+    (
+        "targets/widened-hairline.toml",
+        include_str!("../../targets/widened-hairline.toml"),
+    ),
+];
+
+/// The built-in text of the shipped target at `path` (written as in [`BUILT_IN`], `./` allowed).
+fn built_in(path: &Path) -> Option<&'static str> {
+    let path = path.strip_prefix(".").unwrap_or(path);
+    BUILT_IN
+        .iter()
+        .find(|(name, _)| path == Path::new(name))
+        .map(|(_, text)| *text)
 }
 
 fn image_value(img: &Image, nu1: f64, nu2: f64) -> f64 {

@@ -215,14 +215,41 @@ fn gain_text(reference: f64, mse: f64) -> String {
     }
 }
 
+/// One label for a group of samplers: their labels joined by commas, the first word of the first
+/// (e.g. `optimized`) left out of the others that start with it.
+fn shared_label(group: &[String]) -> String {
+    let first_word = group[0].split(' ').next().unwrap_or_default();
+    let rest = group[1..].iter().map(|l| {
+        l.strip_prefix(first_word)
+            .and_then(|r| r.strip_prefix(' '))
+            .unwrap_or(l)
+    });
+    std::iter::once(group[0].as_str())
+        .chain(rest)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// MSE against N, one line per sampler with its fitted slope; samplers whose estimates are the same
+/// bit for bit share one line.
 fn write_convergence_plot(path: &Path, label: &str, studies: &[&Study], r: usize) -> Result<()> {
+    // Samplers with the same estimates bit for bit would draw one line over another: one line,
+    // named after all of them.
+    let groups = identical_groups(studies);
     let curves: Vec<Convergence> = studies
         .iter()
-        .map(|s| Convergence {
-            sampler: s.sampler.clone(),
-            integrand: s.subject.clone(),
-            points: s.points.clone(),
-            fit: s.fit,
+        .filter_map(|s| {
+            let sampler = match groups.iter().find(|g| g.contains(&s.sampler)) {
+                Some(g) if g[0] != s.sampler => return None,
+                Some(g) => format!("{} (identical estimates)", shared_label(g)),
+                None => s.sampler.clone(),
+            };
+            Some(Convergence {
+                sampler,
+                integrand: s.subject.clone(),
+                points: s.points.clone(),
+                fit: s.fit,
+            })
         })
         .collect();
     plot(
@@ -1026,6 +1053,21 @@ fn write_tables(
 mod tests {
     use super::*;
     use crate::converge::ConvergePoint;
+
+    /// A group's one legend entry names every member, the shared first word once.
+    #[test]
+    fn a_group_shares_one_label() {
+        let group = [
+            "optimized hairline",
+            "optimized double-wedge",
+            "lattice sheared (wrap)",
+        ]
+        .map(String::from);
+        assert_eq!(
+            shared_label(&group),
+            "optimized hairline, double-wedge, lattice sheared (wrap)"
+        );
+    }
 
     fn study(mses: &[f64]) -> Study {
         Study {

@@ -320,6 +320,20 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
         .map(|r| (r[0].clone(), r[1].clone()))
         .collect();
     assert_eq!(subjects.len(), 2, "{subjects:?}");
+    // axes.json labels the npy arrays' axes: the integrands and samplers in the order of the
+    // tables, the study's N.
+    let axes: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("axes.json")).unwrap()).unwrap();
+    assert_eq!(
+        axes,
+        serde_json::json!({
+            "axes": ["integrand", "sampler", "n"],
+            "integrand": subjects.iter().map(|s| &s.0).collect::<Vec<_>>(),
+            "sampler": SAMPLERS.iter().map(|s| s.0).collect::<Vec<_>>(),
+            "n": ns,
+            "realizations": REALIZATIONS,
+        })
+    );
     assert_eq!(subjects[0], (EDGE.to_string(), "analytic".to_string()));
     assert_eq!(subjects[1].1, "hairline");
     // Each row carries its subject's integral: the edge's exact value, and a pixel's reference (a
@@ -516,6 +530,7 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
                     (subject, *sampler, e)
                 );
                 assert_eq!(r["n"], usable(sampler, nmax).to_string());
+                assert_eq!(r["realizations"], REALIZATIONS.to_string());
                 let (mse, stderr) = (num(r, "mse"), num(r, "mse_stderr"));
                 assert!(mse > 0.0 && stderr_fits(mse, stderr), "{r:?}");
                 if e == 0.0 {

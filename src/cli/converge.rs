@@ -152,7 +152,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         );
         for p in &s.points {
             outln!(
-                "{:>8} {:>12.4e} {:>10.2e} {:>12.3}",
+                "{:>8} {:>12.4e} {:>10.2e} {:>12.3e}",
                 p.n,
                 p.mse,
                 p.mse_stderr,

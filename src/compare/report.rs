@@ -145,11 +145,14 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
         Ok(())
     })?;
     write_atomic(&out.join("robustness.csv"), |w| {
-        writeln!(w, "subject,sampler,shear_error,n,mse,mse_stderr")?;
+        writeln!(
+            w,
+            "subject,sampler,shear_error,n,realizations,mse,mse_stderr"
+        )?;
         for row in &outcome.robustness {
             writeln!(
                 w,
-                "\"{}\",\"{}\",{},{},{},{}",
+                "\"{}\",\"{}\",{},{},{r},{},{}",
                 row.subject,
                 row.sampler,
                 row.error,
@@ -175,6 +178,15 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
         &collect(&|p| p.mse_stderr),
     )?;
     write_npy(&out.join("n.npy"), &shape, &collect(&|p| p.n as f64))?;
+    // What each index of the arrays' axes stands for, so that they load labelled.
+    let axes = serde_json::json!({
+        "axes": ["integrand", "sampler", "n"],
+        "integrand": outcome.subjects.iter().map(|s| &s.label).collect::<Vec<_>>(),
+        "sampler": specs.iter().map(|s| s.label()).collect::<Vec<_>>(),
+        "n": outcome.config.ns,
+        "realizations": r,
+    });
+    write_atomic(&out.join("axes.json"), |w| writeln!(w, "{axes:#}"))?;
     write_npy(
         &out.join("seconds_per_estimate.npy"),
         &shape,
@@ -580,7 +592,8 @@ fn write_markdown(
         writeln!(
             w,
             "`convergence.csv` and `robustness.csv` hold every measured number above (gains and local slopes are ratios of them); `mse.npy`, `mse_stderr.npy`, `n.npy` and \
-             `seconds_per_estimate.npy` are arrays [integrand, sampler, N] in the order of the tables; \
+             `seconds_per_estimate.npy` are arrays [integrand, sampler, N] in the order of the tables, \
+             whose labels `axes.json` lists (N there is the study's; `n.npy` holds the N each sampler made); \
              `spectra/*.npy` are [projection (xy, uv, xu, yv), K, K]. `{}` lists the files of this \
              report: the next report written to this folder removes those it does not write again, \
              and nothing else.",

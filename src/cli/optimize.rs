@@ -325,7 +325,13 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     for term in &objective.terms {
         fits.push(metrics::fit(&points, term.proj, &term.grid, setup.method));
     }
-    let wide_fit = metrics::fit(&points, objective.terms[0].proj, &wide, setup.method);
+    // On the wider grid, every projection the target itself constrains (xu and yv in 4D, xy in 2D;
+    // not the strata terms).
+    let target_terms = if args.dims == 4 { 2 } else { 1 };
+    let wide_fits: Vec<_> = objective.terms[..target_terms.min(objective.terms.len())]
+        .iter()
+        .map(|term| metrics::fit(&points, term.proj, &wide, setup.method))
+        .collect();
 
     let losses: Vec<f64> = match &lattice {
         // Every set is the same lattice.
@@ -352,7 +358,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             "max": losses.iter().copied().fold(f64::MIN, f64::max),
         },
         "fit": fits,
-        "fit_twice_the_radius": wide_fit,
+        "fit_twice_the_radius": wide_fits,
         "sets": reports,
         "lattice": lattice,
         "seconds": seconds,

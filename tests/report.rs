@@ -322,6 +322,19 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
     assert_eq!(subjects.len(), 2, "{subjects:?}");
     // axes.json labels the npy arrays' axes: the integrands and samplers in the order of the
     // tables, the study's N.
+    // Every file the report wrote is among the places checked before any work.
+    let labels = |list: Vec<&String>| list.into_iter().cloned().collect::<Vec<String>>();
+    let places = anisospec::compare::report::places(
+        &labels(subjects.iter().map(|s| &s.0).collect()),
+        &SAMPLERS.map(|s| s.0.to_string()),
+    );
+    let manifest = std::fs::read_to_string(out.join("manifest.txt")).unwrap();
+    for file in manifest.lines().skip(1).filter(|l| !l.ends_with('/')) {
+        assert!(
+            places.contains(&(PathBuf::from(file), false)),
+            "{file} is not among the places checked up front"
+        );
+    }
     let axes: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("axes.json")).unwrap()).unwrap();
     assert_eq!(
@@ -808,6 +821,41 @@ fn compare_writes_a_consistent_report_and_reuses_its_cache() {
     }
     // Every sampler at 64 and padded jittered at 16, on both integrands.
     assert_eq!(shared, 2 * (SAMPLERS.len() + 1));
+
+    // A file of the user's where the report puts one (here a plot the manifest no longer lists)
+    // stops the next run before any work, with a usage error naming it, and nothing changes.
+    let manifest = third.join("manifest.txt");
+    let listed = std::fs::read_to_string(&manifest).unwrap();
+    let plot = format!("plots/speed_{}.png", anisospec::compare::report::slug(EDGE));
+    assert!(listed.lines().any(|l| l == plot), "{listed}");
+    let without: String = listed
+        .lines()
+        .filter(|l| *l != plot)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&manifest, &without).unwrap();
+    let before = snapshot(&third);
+    let config = dir.path().join("clash.toml");
+    std::fs::write(&config, study(&odd)).unwrap();
+    let o = anisospec(&[
+        "compare",
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        third.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&plot) && err.contains("did not write it"),
+        "{err}"
+    );
+    assert!(
+        before == snapshot(&third),
+        "the refused run changed the folder"
+    );
 }
 
 /// A cached table whose file is unreadable is rebuilt, with a warning naming it, as the pixel

@@ -282,6 +282,10 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
     let labels: Vec<String> = subjects.iter().map(|s| s.label.clone()).collect();
     config::check_file_names(&labels, "integrands (analytic labels and pixels)")?;
     let specs = sampler_specs(config);
+    // A file of the user's where the report puts one stops the run now, not after the measurements.
+    let sampler_labels: Vec<String> = specs.iter().map(SamplerSpec::label).collect();
+    let places = report::places(&labels, &sampler_labels);
+    crate::output::check_report_places(out, REPORT_MARKER, &places)?;
     let tables = tables::TableCache::new(config, cache_dir);
     let cfg = ConvergeConfig {
         realizations: config.realizations,

@@ -15,7 +15,7 @@ use crate::spectrum::Method;
 use crate::targets::variance::Design;
 use crate::targets::Target;
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The report's main file and its first line; a folder holding it holds an earlier report, which a new
 /// one replaces.
@@ -40,6 +40,48 @@ pub fn slug(label: &str) -> String {
         .filter(|p| !p.is_empty())
         .collect::<Vec<_>>()
         .join("_")
+}
+
+/// The report's files named the same in every study (besides [`REPORT_MARKER`]'s and the manifest).
+const NUMBER_FILES: [&str; 7] = [
+    "convergence.csv",
+    "robustness.csv",
+    "mse.npy",
+    "mse_stderr.npy",
+    "n.npy",
+    "seconds_per_estimate.npy",
+    "axes.json",
+];
+
+/// The plot of one kind (`convergence`, `speed`, `robustness`) for the integrand `label`.
+fn plot_file(kind: &str, label: &str) -> String {
+    format!("plots/{kind}_{}.png", slug(label))
+}
+
+/// The spectra gallery's file of the sampler `label`, with extension `ext` (`png`, `npy`).
+fn spectra_file(label: &str, ext: &str) -> String {
+    format!("spectra/{}.{ext}", slug(label))
+}
+
+/// Every place the report may write for these integrands and samplers, relative to its folder, with
+/// whether it is a folder: a superset (a plot the report leaves out is listed), for checking before
+/// any work that none is taken ([`crate::output::check_report_places`]).
+pub fn places(subject_labels: &[String], sampler_labels: &[String]) -> Vec<(PathBuf, bool)> {
+    let files = std::iter::once(REPORT_MARKER.file.to_string())
+        .chain(NUMBER_FILES.map(String::from))
+        .chain(subject_labels.iter().flat_map(|label| {
+            ["convergence", "speed", "robustness"].map(|kind| plot_file(kind, label))
+        }))
+        .chain(
+            sampler_labels
+                .iter()
+                .flat_map(|label| ["png", "npy"].map(|ext| spectra_file(label, ext))),
+        );
+    ["plots", "spectra"]
+        .map(|folder| (folder.into(), true))
+        .into_iter()
+        .chain(files.map(|f| (f.into(), false)))
+        .collect()
 }
 
 /// Writes the whole report under `out`; `started` is when the run began (the report states the time
@@ -68,8 +110,8 @@ pub fn write(
             plots.push(None);
             continue;
         }
-        let conv = format!("plots/convergence_{}.png", slug(label));
-        let speed = format!("plots/speed_{}.png", slug(label));
+        let conv = plot_file("convergence", label);
+        let speed = plot_file("speed", label);
         write_convergence_plot(
             &out.join(&conv),
             label,
@@ -81,7 +123,7 @@ pub fn write(
     }
     let mut robustness_plots = Vec::new();
     for SubjectInfo { label, .. } in &outcome.subjects {
-        let file = format!("plots/robustness_{}.png", slug(label));
+        let file = plot_file("robustness", label);
         if write_robustness_plot(&out.join(&file), outcome, label)? {
             robustness_plots.push((label.clone(), file));
         }
@@ -371,7 +413,7 @@ fn write_gallery(
                 res: s.res,
             })
             .collect();
-        let file = format!("spectra/{}.png", slug(&spec.label()));
+        let file = spectra_file(&spec.label(), "png");
         let shear_note = if spec.family() == "classical" {
             ""
         } else {
@@ -393,7 +435,7 @@ fn write_gallery(
             .flat_map(|s| s.mean.iter().copied())
             .collect();
         write_npy(
-            &out.join(format!("spectra/{}.npy", slug(&spec.label()))),
+            &out.join(spectra_file(&spec.label(), "npy")),
             &[4, c.spectra_res, c.spectra_res],
             &all,
         )?;

@@ -86,8 +86,12 @@ pub fn table_frame(target: Target, range: (f64, f64)) -> Target {
 
 /// The target, with its dark region shrunk in steps of 10 % in extent until `n` points can reach it
 /// (a shipped target is sized for N of a few hundred; at N = 16 its dark area may exceed the N cells
-/// that 2N degrees of freedom can darken, DESIGN §6).
+/// that 2N degrees of freedom can darken, DESIGN §6). A lattice design or mixture has no loss grid
+/// and is returned as it is.
 pub fn within_reach(mut target: Target, n: usize) -> Result<Target> {
+    if matches!(&target, Target::Variance(v) if v.design() != Design::Points) {
+        return Ok(target);
+    }
     for _ in 0..40 {
         match target.grid(n) {
             Ok(_) => return Ok(target),

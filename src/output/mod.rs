@@ -288,13 +288,8 @@ pub fn write_folder<T>(
     let result = staging_folder(dest, &mut made).and_then(|staging| {
         let value =
             write(staging.path()).map_err(|e| e.with_path_replaced(staging.path(), dest))?;
-        let earlier = read_manifest(dest)?;
-        let before_manifest = earlier.is_none() && marker.is_in(dest);
-        let earlier = earlier.unwrap_or_default();
-        let incoming = check_tree(staging.path(), dest, |target| {
-            in_real_folders(dest, target)
-                && (before_manifest || earlier.iter().any(|e| e == target))
-        })?;
+        let (earlier, replaceable) = replaceable_by_report(dest, marker)?;
+        let incoming = check_tree(staging.path(), dest, replaceable)?;
         write_manifest(dest, earlier.iter().chain(&incoming))?;
         let written = move_tree(staging.path(), dest)?;
         prune_stale(dest, &earlier, &written)?;
@@ -460,26 +455,69 @@ fn walk_tree(
 fn check_tree(from: &Path, to: &Path, replaceable: impl Fn(&Path) -> bool) -> Result<Vec<PathBuf>> {
     let mut targets = Vec::new();
     walk_tree(from, to, &mut |_, target, is_folder| {
-        if is_folder && target.exists() && !target.is_dir() {
-            return Err(Error::Usage(format!(
-                "cannot write into {}: a file stands where the folder goes; move it away or choose another output folder",
-                target.display()
-            )));
-        }
-        if !is_folder && target.is_dir() {
-            return Err(folder_in_the_way(target));
-        }
-        if !is_folder && target.symlink_metadata().is_ok() && !replaceable(target) {
-            return Err(Error::Usage(format!(
-                "cannot write {}: a file of that name is there and the earlier report did not write it \
-                 (it is not in {MANIFEST}, or lies in a linked folder); move it away and run again",
-                target.display()
-            )));
-        }
+        check_place(target, is_folder, &replaceable)?;
         targets.push(target.to_path_buf());
         Ok(())
     })?;
     Ok(targets)
+}
+
+/// Checks that a report can put a file (or, with `is_folder`, a folder) at `target`: no folder
+/// where a file goes, no file where a folder goes, and no existing file unless `replaceable`.
+fn check_place(target: &Path, is_folder: bool, replaceable: &impl Fn(&Path) -> bool) -> Result<()> {
+    if is_folder && target.exists() && !target.is_dir() {
+        return Err(Error::Usage(format!(
+            "cannot write into {}: a file stands where the folder goes; move it away or choose another output folder",
+            target.display()
+        )));
+    }
+    if !is_folder && target.is_dir() {
+        return Err(folder_in_the_way(target));
+    }
+    if !is_folder && target.symlink_metadata().is_ok() && !replaceable(target) {
+        return Err(Error::Usage(format!(
+            "cannot write {}: a file of that name is there and the earlier report did not write it \
+             (it is not in {MANIFEST}, or lies in a linked folder); move it away and run again",
+            target.display()
+        )));
+    }
+    Ok(())
+}
+
+/// The files of the earlier report in `dest` (its [`MANIFEST`]) and which existing files a new
+/// report may replace: those the manifest lists, or, for a report from before the manifest (its
+/// `marker` and no manifest), every file; in either case only in real folders, not links.
+fn replaceable_by_report(
+    dest: &Path,
+    marker: ReportMarker,
+) -> Result<(Vec<PathBuf>, impl Fn(&Path) -> bool + '_)> {
+    let earlier = read_manifest(dest)?;
+    let before_manifest = earlier.is_none() && marker.is_in(dest);
+    let earlier = earlier.unwrap_or_default();
+    let listed = earlier.clone();
+    Ok((earlier, move |target: &Path| {
+        in_real_folders(dest, target) && (before_manifest || listed.iter().any(|e| e == target))
+    }))
+}
+
+/// Checks, before any work, that a report can put its `places` (paths relative to `dest`, with
+/// whether each is a folder) in `dest`, by the rule [`write_folder`] applies when it moves the
+/// report in: so a file of the user's where the report puts one stops the run before its work,
+/// not after. Names the report may or may not write (a plot it leaves out) may be listed: a
+/// superset is checked.
+pub fn check_report_places(
+    dest: &Path,
+    marker: ReportMarker,
+    places: &[(PathBuf, bool)],
+) -> Result<()> {
+    if !dest.is_dir() {
+        return Ok(());
+    }
+    let (_, replaceable) = replaceable_by_report(dest, marker)?;
+    for (place, is_folder) in places {
+        check_place(&dest.join(place), *is_folder, &replaceable)?;
+    }
+    Ok(())
 }
 
 /// Moves every file under `from` to the same place under `to`, creating subfolders as needed, and

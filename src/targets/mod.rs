@@ -10,7 +10,8 @@
 //! [`Target::grid`] refuses targets darker than that and reports the reachable fraction. Sets that pay
 //! for darkness with peaks darken far more: a rank-1 lattice is dark everywhere but on its dual lattice,
 //! where `P = N` ([`crate::samplers::lattice`]). So a target that asks for peaks (an image, e.g. a
-//! measured spectrum) may darken `N` cells plus what it asks above `P = 1` inside its fit radius.
+//! measured spectrum) may darken `N` cells plus what it asks above `P = 1`, net, over its other cells
+//! inside its fit radius, each taken at most `P = N`.
 //!
 //! File format (one table, `kind` picks the shape, unknown keys are errors):
 //!
@@ -328,8 +329,10 @@ impl Target {
     /// target's path (`targets/hairline.toml`, ...) with no file there is read from the copy built
     /// into the binary ([`BUILT_IN`]).
     pub fn load(path: &Path) -> Result<Self> {
+        let missing = std::fs::symlink_metadata(path)
+            .is_err_and(|e| e.kind() == std::io::ErrorKind::NotFound);
         let text = match built_in(path) {
-            Some(text) if !path.exists() => text.to_string(),
+            Some(text) if missing => text.to_string(),
             _ => std::fs::read_to_string(path).map_err(|e| Error::read_input(path, e))?,
         };
         let mut target = Self::parse(&text).map_err(|e| match e {
@@ -562,13 +565,13 @@ impl Target {
         }
     }
 
-    /// What the target asks above `P = 1`, integrated over normalized frequency: its expected sum of
-    /// `T − 1` over the cells where `T > 1`, in units of `N` (an image's peaks; 0 for the shapes).
-    fn peak_area(&self) -> f64 {
+    /// What the target asks above `P = 1` at `n` points, integrated over normalized frequency: its
+    /// expected [`peak_excess`] over the cells, in units of `N` (an image's peaks; 0 for the shapes).
+    fn peak_area(&self, n: usize) -> f64 {
         match self {
             Target::Image(i) => {
-                let excess: f64 = i.pixels.iter().map(|&v| (v - 1.0).max(0.0)).sum();
-                excess / i.pixels.len().max(1) as f64 * (2.0 * i.extent).powi(2)
+                let lit = i.pixels.iter().copied().filter(|&v| v > DARK_LEVEL);
+                peak_excess(lit, n) / i.pixels.len().max(1) as f64 * (2.0 * i.extent).powi(2)
             }
             _ => 0.0,
         }
@@ -607,8 +610,9 @@ impl Target {
         }
         // Refuse hopeless targets before laying out a grid that may not fit in memory.
         let estimate = self.dark_area() * n as f64;
-        if estimate > 4.0 * (REACH + self.peak_area()) * n as f64 {
-            return Err(self.beyond_reach(n, estimate, 0.0));
+        let peaks = self.peak_area(n) * n as f64;
+        if estimate > 4.0 * (REACH * n as f64 + peaks) {
+            return Err(self.beyond_reach(n, estimate, peaks));
         }
         let sqrt_n = (n as f64).sqrt();
         let largest = (crate::spectrum::MAX_RES / 2 - 1) as f64;
@@ -644,12 +648,15 @@ impl Target {
         if dark_cells == 0 {
             return Err(self.nothing_dark(n));
         }
-        // Peaks pay for darkness: what the target asks above P = 1 inside the fit radius (an image's
-        // peaks; 0 for the shapes) adds to the cells N points can darken.
-        let surplus: f64 = (0..res * res)
-            .filter(|&idx| inside[idx])
-            .map(|idx| (target[idx] - 1.0).max(0.0))
-            .sum();
+        // Peaks pay for darkness: what the target asks above P = 1, net, over the cells inside the
+        // fit radius that are not dark (an image's peaks, each at most P = N; 0 for the shapes), adds
+        // to the cells N points can darken. Noise about 1 adds about nothing.
+        let surplus = peak_excess(
+            (0..res * res)
+                .filter(|&idx| inside[idx] && !dark[idx])
+                .map(|idx| target[idx]),
+            n,
+        );
         if dark_cells as f64 > REACH * n as f64 + surplus {
             return Err(self.beyond_reach(n, dark_cells as f64, surplus));
         }
@@ -806,6 +813,13 @@ impl Target {
             crate::output::plot::short_number(reach / dark_cells)
         ))
     }
+}
+
+/// The net excess above `P = 1` of the values `t` of a target's cells that are not dark, each taken
+/// at most `N` (no set of `n` points has a larger `P`): `Σ (min(t, N) − 1)`, or 0 where the cells
+/// ask for less than 1 on average.
+fn peak_excess(t: impl Iterator<Item = f64>, n: usize) -> f64 {
+    t.map(|t| t.min(n as f64) - 1.0).sum::<f64>().max(0.0)
 }
 
 /// The shipped targets that need no other file, built into the binary under their paths in the
@@ -1113,15 +1127,16 @@ mod tests {
         assert!(e.contains("reachable fraction"), "{e}");
     }
 
-    /// An image dark on its whole disc (about 800 cells at N = 256, extent 1) is beyond N's reach,
-    /// unless it asks for peaks that pay for it, as a lattice's spectrum does: four cells of P = 250
-    /// add 4 × 249 to the 256 cells N points darken alone.
+    /// An image dark on its whole disc (956 cells at N = 256, extent 1) is beyond N's reach, unless
+    /// it asks for peaks that pay for it, as a lattice's spectrum does: each cell of P = p adds
+    /// min(p, N) − 1 to the 256 cells N points darken alone. The cells on the image's edge |k| = 16
+    /// read 0.5 (the image is made symmetric, and beyond its edge it is 1), −0.5 each: −63 in all.
     #[test]
     fn peaks_pay_for_darkness() {
-        let image = |peak: f64| {
+        let image = |peak: f64, cells: &[(usize, usize)]| {
             let m = 32;
             let mut pixels = vec![0.0; m * m];
-            for (i, j) in [(16, 24), (16, 8), (24, 16), (8, 16)] {
+            for &(i, j) in cells {
                 pixels[i * m + j] = peak;
             }
             Target::Image(Image {
@@ -1133,17 +1148,51 @@ mod tests {
                 shape: [m, m],
             })
         };
-        let e = image(1.0).grid(256).unwrap_err().to_string();
+        let four = [(16, 24), (16, 8), (24, 16), (8, 16)];
+        let e = image(1.0, &four).grid(256).unwrap_err().to_string();
         assert!(
             e.contains("can darken only about 256:") && e.contains("reachable fraction"),
             "{e}"
         );
-        let e = image(150.0).grid(256).unwrap_err().to_string();
+        let e = image(150.0, &four).grid(256).unwrap_err().to_string();
         assert!(
-            e.contains("about 852 (256 for its N, and 596 that its peaks above P = 1 pay for)"),
+            e.contains("about 789 (256 for its N, and 533 that its peaks above P = 1 pay for)"),
             "{e}"
         );
-        let grid = image(250.0).grid(256).unwrap();
-        assert!(grid.dark_cells > 256 + 500, "{}", grid.dark_cells);
+        let grid = image(250.0, &four).grid(256).unwrap();
+        assert_eq!(grid.dark_cells, 956);
+        // No peak pays beyond P = N: two cells of 1e7 pay 2 × 255 (less the edge's 63).
+        let e = image(1e7, &four[..2]).grid(256).unwrap_err().to_string();
+        assert!(e.contains("256 for its N, and 447 that its peaks"), "{e}");
+    }
+
+    /// Noise about 1 pays for nothing: a dark disc of about 314 cells (radius 10 at N = 256) in cells
+    /// alternating 0.5 and 1.62 (mean 1.06) is refused; counting only the cells above 1 would have
+    /// let it through (0.62 for each of about 245 cells).
+    #[test]
+    fn noise_does_not_pay_for_darkness() {
+        let m = 32;
+        let pixels = (0..m * m)
+            .map(|idx| {
+                let (i, j) = ((idx / m) as f64 - 16.0, (idx % m) as f64 - 16.0);
+                if i.hypot(j) < 10.0 {
+                    0.0
+                } else if idx % 2 == 0 {
+                    0.5
+                } else {
+                    1.62
+                }
+            })
+            .collect();
+        let noisy = Target::Image(Image {
+            file: PathBuf::from("measured.npy"),
+            extent: 1.0,
+            dark_weight: None,
+            falloff: None,
+            pixels,
+            shape: [m, m],
+        });
+        let e = noisy.grid(256).unwrap_err().to_string();
+        assert!(e.contains("reachable fraction"), "{e}");
     }
 }

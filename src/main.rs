@@ -140,6 +140,7 @@ fn main() -> ExitCode {
         // process stopped by SIGPIPE has.
         Err(e) if e.is_broken_pipe() => ExitCode::from(141),
         Err(e) => {
+            anisospec::output::interrupt::yield_to_interrupt();
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code() as u8)
         }

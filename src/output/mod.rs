@@ -38,17 +38,22 @@ where
     let dir = folder_of(path);
     // Declared before the temporary file, so dropped after it: the folders it made go once empty.
     let mut made = NewFolders::default();
-    made.make(dir)?;
     let mut builder = tempfile::Builder::new();
     builder.prefix(".anisospec-");
     // A temporary file is created owner-only (0600); an output is an ordinary file, 0666 less the
     // umask, as `File::create` makes it (a report folder others can read).
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let mut tmp = builder
-        .tempfile_in(dir)
-        .map_err(|e| Error::io("create a file in", dir, os_error(&e)))?;
-    let _registered = interrupt::Temporary::new(tmp.path());
+    // The folders too: one made inside a staging folder an interrupt is removing would stay.
+    let (mut tmp, _registered) = interrupt::create(
+        || {
+            made.make(dir)?;
+            builder
+                .tempfile_in(dir)
+                .map_err(|e| Error::io("create a file in", dir, os_error(&e)))
+        },
+        |t| t.path(),
+    )?;
     {
         let mut w = BufWriter::new(tmp.as_file_mut());
         fill(&mut w)
@@ -391,14 +396,19 @@ fn folder_for<'a>(
 /// A temporary folder inside `dir` (created if missing, and listed in `made`), on the file system of
 /// the outputs.
 fn staging_folder(dir: &Path, made: &mut NewFolders) -> Result<Staging> {
-    made.make(dir)?;
-    let folder = tempfile::Builder::new()
-        .prefix(".anisospec-")
-        .tempdir_in(dir)
-        .map_err(|e| Error::io("create a folder in", dir, os_error(&e)))?;
+    let (folder, registered) = interrupt::create(
+        || {
+            made.make(dir)?;
+            tempfile::Builder::new()
+                .prefix(".anisospec-")
+                .tempdir_in(dir)
+                .map_err(|e| Error::io("create a folder in", dir, os_error(&e)))
+        },
+        |folder| folder.path(),
+    )?;
     Ok(Staging {
-        _registered: interrupt::Temporary::new(folder.path()),
         folder,
+        _registered: registered,
     })
 }
 

@@ -612,8 +612,8 @@ fn exr_image_targets_match_npy() {
 /// diagonal, and the built-in 2D lattice) is nudged off it. Before, the solver stopped at once,
 /// "converged", and handed the start back: loss 3300 and 200 on the blue-noise target at N = 64
 /// with the exact DFT, dark mean 7.1 (white noise: 1). Nudged, both fit like a Sobol start (loss
-/// 0.09 and 0.08 after 200 iterations, against Sobol's 0.07: dark mean P below the issue's 0.1). A
-/// Sobol start is not nudged.
+/// 0.09 and 0.08 after 200 iterations, against Sobol's 0.07), within issue 5's fit criteria (dark
+/// mean P and annular error at most 0.1). A Sobol start is not nudged.
 #[test]
 fn a_stationary_start_is_left() {
     let n = 64;
@@ -637,8 +637,9 @@ fn a_stationary_start_is_left() {
         let (pts, reports) = optimize_sets(&setup, 1, 1, &|_| {}).unwrap();
         let fit = metrics::fit(&pts, Projection::XY, &obj.terms[0].grid, Method::Exact);
         assert_eq!(reports[0].nudged, nudged, "{init}");
+        // The fit criteria of issue 5 (as in shipped_targets_fit_at_256).
         assert!(
-            reports[0].loss < 0.2 && fit.dark_mean <= 0.1,
+            fit.dark_mean <= 0.1 && fit.annular_max_error <= 0.1,
             "{init}: loss {} from {}, {fit:?}",
             reports[0].loss,
             reports[0].initial_loss

@@ -190,6 +190,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             plot(
                 &staged(png),
                 &studies,
+                None,
                 &format!(
                     "Convergence on {}, R = {} realizations per N",
                     f.name(),

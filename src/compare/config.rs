@@ -498,7 +498,7 @@ impl CompareConfig {
         for path in &self.tables {
             let target = crate::targets::Target::load(path).map_err(|e| {
                 Error::Usage(format!(
-                    "table target {}: {e}; tables = [...] lists target files, relative to the folder compare runs in (the shipped targets/*.toml are also built in, read from the binary where no such file exists); give files that exist",
+                    "table target {}: {e}; tables = [...] lists target files, relative to the folder compare runs in (the shipped targets/*.toml that need no image are also built in, read from the binary where no such file exists); give files that exist",
                     path.display()
                 ))
             })?;

@@ -290,14 +290,18 @@ fn write_convergence_plot(path: &Path, label: &str, studies: &[&Study], r: usize
     // Samplers with the same estimates bit for bit would draw one line over another: one line,
     // named after all of them.
     let groups = identical_groups(studies);
+    // Each line keeps its sampler's colour of the other plots: its position among all the samplers.
+    let mut colours = Vec::new();
     let curves: Vec<Convergence> = studies
         .iter()
-        .filter_map(|s| {
+        .enumerate()
+        .filter_map(|(i, s)| {
             let sampler = match groups.iter().find(|g| g.contains(&s.sampler)) {
                 Some(g) if g[0] != s.sampler => return None,
                 Some(g) => format!("{} (identical estimates)", shared_label(g)),
                 None => s.sampler.clone(),
             };
+            colours.push(i);
             Some(Convergence {
                 sampler,
                 integrand: s.subject.clone(),
@@ -309,6 +313,7 @@ fn write_convergence_plot(path: &Path, label: &str, studies: &[&Study], r: usize
     plot(
         path,
         &curves,
+        Some(&colours),
         &format!("{label}: MSE against N ({r} realizations per point)"),
     )
 }

@@ -300,12 +300,19 @@ fn csv_field(s: &str) -> String {
 }
 
 /// The log-log plot of studies: MSE against N with ±1 standard error bars, one line per sampler,
-/// slopes (with 95% intervals) in the legend.
-pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Result<()> {
+/// slopes (with 95% intervals) in the legend; study `i` drawn in palette colour `colours[i]` when
+/// given (so that a sampler keeps its colour across plots), else in its own position's.
+pub fn plot(
+    path: &std::path::Path,
+    studies: &[Convergence],
+    colours: Option<&[usize]>,
+    title: &str,
+) -> Result<()> {
     use crate::output::plot::{write_loglog_png, LogLogPlot, Series, XScale};
     let series: Vec<Series> = studies
         .iter()
-        .map(|s| Series {
+        .enumerate()
+        .map(|(i, s)| Series {
             label: match &s.fit {
                 Some(f) => format!(
                     "{}: slope {:.2}, 95% CI {}",
@@ -318,7 +325,7 @@ pub fn plot(path: &std::path::Path, studies: &[Convergence], title: &str) -> Res
             points: s.points.iter().map(|p| (p.n as f64, p.mse)).collect(),
             errors: Some(s.points.iter().map(|p| p.mse_stderr).collect()),
             dashed: false,
-            colour: None,
+            colour: colours.map(|c| c[i]),
         })
         .collect();
     write_loglog_png(

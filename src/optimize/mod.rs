@@ -229,7 +229,7 @@ pub fn time_limited(reports: &[SetReport]) -> usize {
 pub struct SetReport {
     /// Index of the set.
     pub set: usize,
-    /// Loss at the start.
+    /// Loss at the start (after the nudge off a stationary start, if any: see `nudged`).
     pub initial_loss: f64,
     /// Final loss (spectral plus repulsion).
     pub loss: f64,

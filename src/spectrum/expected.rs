@@ -35,7 +35,8 @@ const CHUNKS_PER_BATCH: usize = 16;
 /// a batch stay small on few threads.
 const CHUNKS_PER_THREAD: usize = 4;
 /// Bytes the partial sums of one batch may hold: at K = 8192 one chunk's sums are 537 MB, so a batch
-/// holds three chunks there (16 would be 8.6 GB); up to K = 4096 this allows all 16.
+/// holds three chunks there (16 would be 8.6 GB); at K = 4096, 15 with the NUFFT (half-plane sums)
+/// and 8 with the exact DFT (whole-grid sums).
 const BATCH_BYTES: usize = 1 << 31;
 
 /// Averages the spectra of `realizations` projected point sets, `draw(r)` giving realization `r`.

@@ -182,7 +182,7 @@ pub fn dark_withheld_note(profile: &[RadialBin], method: Method, n: usize) -> Op
         "note: at --eps {eps:e} with N = {n}, a bin whose P is 0 can read up to (10 eps)^2 N = {dark:.3} \
          with the NUFFT (when every point's error adds up, as on a lattice), so the radial profile leaves \
          the anisotropy out on {withheld} annuli whose mean is below that; for it, give --eps {suggested:e} \
-         or less, or --exact"
+         or less, or --exact (an annulus that is truly dark, as a lattice's, stays without one)"
     ))
 }
 

@@ -1166,6 +1166,28 @@ mod tests {
         assert!(e.contains("256 for its N, and 447 that its peaks"), "{e}");
     }
 
+    /// Every shipped target that needs no image is built in, with its file's text, and nothing else.
+    #[test]
+    fn shipped_targets_without_an_image_are_built_in() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("targets");
+        let mut names = Vec::new();
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                let text = std::fs::read_to_string(&path).unwrap();
+                let name = format!("targets/{}", path.file_name().unwrap().to_string_lossy());
+                match Target::parse(&text).unwrap() {
+                    Target::Image(_) => assert_eq!(built_in(Path::new(&name)), None, "{name}"),
+                    _ => {
+                        assert_eq!(built_in(Path::new(&name)), Some(text.as_str()), "{name}");
+                        names.push(name);
+                    }
+                }
+            }
+        }
+        assert_eq!(names.len(), BUILT_IN.len(), "{names:?}");
+    }
+
     /// Noise about 1 pays for nothing: a dark disc of about 314 cells (radius 10 at N = 256) in cells
     /// alternating 0.5 and 1.62 (mean 1.06) is refused; counting only the cells above 1 would have
     /// let it through (0.62 for each of about 245 cells).

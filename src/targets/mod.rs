@@ -1127,6 +1127,18 @@ mod tests {
         assert!(e.contains("reachable fraction"), "{e}");
     }
 
+    /// An image target of `m × m` pixels over `±1` (a cell per pixel at N = 256), as if measured.
+    fn measured_image(pixels: Vec<f64>, m: usize) -> Target {
+        Target::Image(Image {
+            file: PathBuf::from("measured.npy"),
+            extent: 1.0,
+            dark_weight: None,
+            falloff: None,
+            pixels,
+            shape: [m, m],
+        })
+    }
+
     /// An image dark on its whole disc (956 cells at N = 256, extent 1) is beyond N's reach, unless
     /// it asks for peaks that pay for it, as a lattice's spectrum does: each cell of P = p adds
     /// min(p, N) − 1 to the 256 cells N points darken alone. The cells on the image's edge |k| = 16
@@ -1139,14 +1151,7 @@ mod tests {
             for &(i, j) in cells {
                 pixels[i * m + j] = peak;
             }
-            Target::Image(Image {
-                file: PathBuf::from("measured.npy"),
-                extent: 1.0,
-                dark_weight: None,
-                falloff: None,
-                pixels,
-                shape: [m, m],
-            })
+            measured_image(pixels, m)
         };
         let four = [(16, 24), (16, 8), (24, 16), (8, 16)];
         let e = image(1.0, &four).grid(256).unwrap_err().to_string();
@@ -1206,14 +1211,7 @@ mod tests {
                 }
             })
             .collect();
-        let noisy = Target::Image(Image {
-            file: PathBuf::from("measured.npy"),
-            extent: 1.0,
-            dark_weight: None,
-            falloff: None,
-            pixels,
-            shape: [m, m],
-        });
+        let noisy = measured_image(pixels, m);
         let e = noisy.grid(256).unwrap_err().to_string();
         assert!(e.contains("reachable fraction"), "{e}");
     }

@@ -201,10 +201,11 @@ pub fn mixture(target: &Variance, n: usize, sets: usize) -> Result<LatticeMixtur
 
 /// [`mixture`] over `count` (at least 2) errors.
 fn mixture_over(target: &Variance, n: usize, sets: usize, count: usize) -> Result<LatticeMixture> {
-    if !(2..=LATTICE_MAX_N).contains(&n) || sets == 0 {
-        return Err(Error::Usage(format!(
-            "a lattice mixture needs 2 to {LATTICE_MAX_N} points and at least one set (asked: {n} points, {sets} sets)"
-        )));
+    check_n(n)?;
+    if sets == 0 {
+        return Err(Error::Usage(
+            "a lattice mixture needs at least one set (asked: 0 sets)".into(),
+        ));
     }
     let spread = target.shear_error();
     let errors: Vec<f64> = (0..count)

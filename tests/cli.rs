@@ -3399,7 +3399,8 @@ fn an_unwritable_standard_output_is_an_error_not_a_panic() {
     assert!(err.is_empty(), "{err}");
 }
 
-/// A render or reference beyond 2^34 rays is refused before any work, naming the flag to lower.
+/// A render or reference beyond 2^34 rays, or with a reference count it cannot draw, is refused
+/// before any work, naming the flag to lower or the counts allowed.
 #[test]
 fn a_render_beyond_the_ray_budget_is_refused_at_once() {
     let (dir, out) = tmp("big.exr");
@@ -3427,6 +3428,26 @@ fn a_render_beyond_the_ray_budget_is_refused_at_once() {
             out_s,
         ],
         "lower --spp",
+        &out,
+    );
+    // A reference count that is not a power of two, with the oracle's shear: refused before the
+    // oracle of 16.8 million pixels (minutes of work) is built.
+    rejects(
+        &[
+            "render",
+            "--scene",
+            scene,
+            "--ref-count",
+            "1000",
+            "--sampler",
+            "random",
+            "--spp",
+            "1",
+            "--shear",
+            "-o",
+            out_s,
+        ],
+        "must be a power of two",
         &out,
     );
 }

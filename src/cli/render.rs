@@ -86,7 +86,9 @@ fn check_rays(pixels: usize, per_pixel: usize, flag: &str) -> Result<()> {
 pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = Scene::load(args.scene.as_deref())?;
     let (w, h) = (scene.width(), scene.height());
-    // Every render computes (or reads) the reference; a render casts --spp rays per pixel too.
+    // Every render computes (or reads) the reference; a render casts --spp rays per pixel too. Both
+    // are checked before any work (the oracle of a large scene takes minutes).
+    crate::render::pixel::check_ref_count(args.ref_count)?;
     check_rays(w * h, args.ref_count, "--ref-count")?;
     if !args.reference {
         check_rays(w * h, args.spp, "--spp")?;

@@ -1,6 +1,8 @@
 //! Empirical convergence (DESIGN §4): for each `N`, `R` realizations, each an independent set from the
 //! sampler moved by its own random toroidal shift (and, optionally, the integrand placed at random);
-//! the mean squared error against the exact integral with its standard error, the wall time, and a
+//! the mean squared error against the integrand's reference integral (exact for closed forms; a
+//! Monte Carlo estimate for pixels, whose squared standard error every MSE then contains on average)
+//! with its standard error, the wall time, and a
 //! power-law fit `MSE ∝ N^slope` with a confidence interval.
 //!
 //! Realization `r` at size `N` draws its points, its shift and its placement from sub-streams of

@@ -272,6 +272,51 @@ fn a_lattice_prediction_has_no_interval_at_any_tolerance() {
     }
 }
 
+/// Where a lattice's spectrum is 0 at every frequency the integrand has energy, its prediction is
+/// zero and its digits are rounding (a smooth Gaussian: grid sums about 1e-33): no slope, no cone
+/// fits, every point flagged, while Sobol on the same Gaussian gets a slope with an interval. On an
+/// axis-aligned step the grid sums are rounding beside an exact white-noise tail: the slope is the
+/// tail's, with no interval (the realizations' spread, about 1e-33, is rounding), never an interval
+/// fitted to rounding (before: "-1.000 .. -1.000").
+#[test]
+fn a_prediction_at_rounding_level_gets_no_slope_or_interval() {
+    let vc = VarianceConfig {
+        res: 32,
+        res_per_n: None,
+        realizations: 20,
+        cones: 4,
+        seed: 1,
+        method: Method::Exact,
+    };
+    let gaussian = parse("gaussian:sigma=0.15").unwrap();
+    let ns = [1024, 4096, 16384];
+    let lattice = predict(sampler("lattice", 2).as_ref(), gaussian.as_ref(), &ns, &vc).unwrap();
+    assert!(
+        lattice.points.iter().all(|p| p.is_rounding()),
+        "{lattice:?}"
+    );
+    assert!(lattice.fit.is_none(), "{lattice:?}");
+    assert!(lattice.cone_fits.iter().all(Option::is_none), "{lattice:?}");
+    let sobol = predict(sampler("sobol", 2).as_ref(), gaussian.as_ref(), &ns, &vc).unwrap();
+    assert!(sobol.points.iter().all(|p| !p.is_rounding()), "{sobol:?}");
+    assert!(sobol.fit.unwrap().interval().is_some(), "{sobol:?}");
+
+    let step = parse("step:theta=0,c=0.5").unwrap();
+    let vc = VarianceConfig { res: 128, ..vc };
+    let lattice = predict(
+        sampler("lattice", 2).as_ref(),
+        step.as_ref(),
+        &[16, 64],
+        &vc,
+    )
+    .unwrap();
+    assert!(
+        lattice.points.iter().all(|p| !p.is_rounding()),
+        "{lattice:?}"
+    );
+    assert_eq!(lattice.fit.unwrap().interval(), None, "{lattice:?}");
+}
+
 #[test]
 fn prediction_meets_measurement_in_4d_on_two_planes() {
     // Two sheared Gaussians in xu and yv: the prediction sums the xu and yv spectra of the 4D sets.

@@ -145,16 +145,22 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
             p.stderr,
             p.tail
         );
-        for c in &p.cones {
-            let share = if p.grid > 0.0 {
-                100.0 * c / p.grid
+        for (c, rounding) in p.cones.iter().zip(&p.cone_rounding) {
+            if p.grid > 0.0 && c > rounding {
+                out!(" {:>8.1}", 100.0 * c / p.grid);
             } else {
-                0.0
-            };
-            out!(" {share:>8.1}");
+                // Zero within rounding: no share to print.
+                out!(" {:>8}", "—");
+            }
         }
         outln!();
     }
+    let at_rounding: Vec<String> = pred
+        .points
+        .iter()
+        .filter(|p| p.is_rounding())
+        .map(|p| format!("{} (rounding bound {:.1e})", p.n, p.rounding))
+        .collect();
     match &pred.fit {
         Some(fit) => match fit.interval() {
             Some((lo, hi)) => outln!(
@@ -166,6 +172,10 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
                 fit.slope
             ),
         },
+        None if !at_rounding.is_empty() => outln!(
+            "no predicted slope: the predicted variance is zero within f64 rounding (and the spectrum method's tolerance) at N = {}, as when the sampler's spectrum is 0 wherever the integrand has energy (a lattice on a smooth integrand); its digits there are rounding, not a value",
+            at_rounding.join(", ")
+        ),
         None => outln!(
             "no predicted slope (a log-log fit needs two or more distinct N and a positive variance at each)"
         ),
@@ -216,7 +226,7 @@ fn warn_dominant_tail(pred: &VariancePrediction, sheared: bool) {
         "raise --res-per-n (K = max(--res, M·N)) or --res to push the tail out".to_string()
     };
     eprintln!(
-        "warning: the white-noise tail is more than {:.0} % of the predicted variance at {}: it assumes the sampler's spectrum is white (P = 1) beyond the frequency grid, which overstates the variance of a sampler whose spectrum is still below 1 there (jittered or N-rooks past a grid of a few N); {fix}",
+        "warning: the white-noise tail is more than {:.0} % of the predicted variance at {}: it assumes the sampler's spectrum is white (P = 1) beyond the frequency grid, which overstates the variance of a sampler whose spectrum is still below 1 there (jittered or N-rooks past a grid of a few N) and understates it where the spectrum has peaks there (a lattice's P = N); {fix}",
         100.0 * TAIL_WARNING_SHARE,
         dominated.join(", ")
     );

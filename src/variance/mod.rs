@@ -76,9 +76,20 @@ pub struct VariancePoint {
     pub cones: Vec<f64>,
     /// Standard error of each cone's share.
     pub cone_stderr: Vec<f64>,
+    /// A bound on what f64 rounding (and the NUFFT's tolerance) can put into `variance` (absolute:
+    /// [`bin_error`] over the grid, and the tail's rounding): a `variance` not above it is zero
+    /// within rounding, and has no slope or interval.
+    pub rounding: f64,
+    /// The same bound for each cone's share.
+    pub cone_rounding: Vec<f64>,
 }
 
 impl VariancePoint {
+    /// Whether the predicted variance is zero within rounding (not above [`VariancePoint::rounding`]).
+    pub fn is_rounding(&self) -> bool {
+        self.variance <= self.rounding
+    }
+
     /// The tail's share of the predicted variance (`tail / variance`, a fraction in [0, 1]); `None`
     /// when the prediction is zero.
     pub fn tail_share(&self) -> Option<f64> {
@@ -359,6 +370,9 @@ struct RealizationSums {
     total: Welford,
     /// Per cone: its share of `V_r`.
     cones: Vec<Welford>,
+    /// Per cone: the mean over realizations of the bound on its share's absolute error
+    /// ([`bin_error`] weighted by `|f̂|² / N`), which bounds the error of the mean.
+    cone_errors: Vec<f64>,
 }
 
 /// Per-realization `V_r` at size `n`, and per cone its share, each as a running mean and standard
@@ -372,35 +386,50 @@ fn realizations(
     cfg: &VarianceConfig,
     bar: &ProgressBar,
 ) -> RealizationSums {
+    let rho_f = crate::spectrum::exact::sum_error(n, res);
     let one = |r: usize| {
         bar.inc(1);
         let set = sampler.generate(n, &mut rng::substream(cfg.seed, r as u64, n as u64));
         let mut cones = vec![0.0; cfg.cones];
+        let mut errors = vec![0.0; cfg.cones];
         for (p, active) in spec.planes.iter().zip(&spec.active) {
             if active.is_empty() {
                 continue;
             }
+            let nufft_eps = match cfg.method {
+                Method::Nufft { eps } if full_grid(active.len(), res) => Some(eps),
+                _ => None,
+            };
             let pts = project(&set, sampler.dims(), *p);
             let power = power_at(&pts, res, active, cfg.method);
             for (e, pk) in active.iter().zip(power) {
                 cones[e.2] += e.1 * pk / n as f64;
+                errors[e.2] += e.1 * bin_error(pk, n, rho_f, nufft_eps) / n as f64;
             }
         }
-        cones
+        (cones, errors)
     };
     let mut sums = RealizationSums {
         total: Welford::default(),
         cones: vec![Welford::default(); cfg.cones],
+        cone_errors: vec![0.0; cfg.cones],
     };
     for start in (0..cfg.realizations).step_by(REALIZATION_BATCH) {
         let end = (start + REALIZATION_BATCH).min(cfg.realizations);
-        let batch: Vec<Vec<f64>> = (start..end).into_par_iter().map(one).collect();
-        for cones in batch {
+        let batch: Vec<(Vec<f64>, Vec<f64>)> = (start..end).into_par_iter().map(one).collect();
+        for (cones, errors) in batch {
             sums.total.push(cones.iter().sum());
             for (w, &x) in sums.cones.iter_mut().zip(&cones) {
                 w.push(x);
             }
+            for (sum, e) in sums.cone_errors.iter_mut().zip(errors) {
+                *sum += e;
+            }
         }
+    }
+    let r = cfg.realizations as f64;
+    for e in &mut sums.cone_errors {
+        *e /= r;
     }
     sums
 }
@@ -444,6 +473,19 @@ fn relative_error(spec: &Spectrum, res: usize, n: usize, method: Method) -> f64 
     per_bin + (terms + 1.0) * u
 }
 
+/// What the computation can put into one bin's `P = |F|² / N` (absolute), at `n` points on a
+/// `res × res` grid, given the computed `P`: the bound [`relative_error`] calls second order, which is
+/// all there is where the exact power is 0 (a lattice whose dual misses the integrand's energy). A
+/// bin's `F` errs by at most `ρ_F N` ([`crate::spectrum::exact::sum_error`]), so `P` by
+/// `(2 |F| ρ_F N + ρ_F² N²) / N = 2 ρ_F sqrt(P N) + ρ_F² N`. Full-grid NUFFT sums (`nufft_eps`) err by
+/// `10 · eps` relative down to 1e-3 of the mean power, about 1 (the mean of `P` over all frequencies
+/// is 1 for distinct points), so by at most `10 · eps · max(P, 1e-3)` (taken as absolute below 1e-3).
+fn bin_error(p: f64, n: usize, rho_f: f64, nufft_eps: Option<f64>) -> f64 {
+    let n = n as f64;
+    let rounding = 2.0 * rho_f * (p.max(0.0) * n).sqrt() + rho_f * rho_f * n;
+    nufft_eps.map_or(rounding, |eps| rounding.max(10.0 * eps * p.max(1e-3)))
+}
+
 /// The floor of a point's relative standard error ([`fit_power_law`]) when each realization's value
 /// is within a relative `rho` of the same value (a share `part` of the fitted one, the rest exact):
 /// values within `± rho·v` of one another have a standard deviation of at most
@@ -452,6 +494,13 @@ fn relative_error(spec: &Spectrum, res: usize, n: usize, method: Method) -> f64 
 fn stderr_floor(rho: f64, realizations: usize, part: f64) -> f64 {
     let r = realizations as f64;
     (rho + r * f64::EPSILON / 2.0) * part / (r - 1.0).sqrt()
+}
+
+/// The part of a point's relative standard-error floor that an absolute error bound adds, given as
+/// `relative = bound / value`: realizations within `± bound` of one another have a standard
+/// deviation of at most `bound sqrt(R / (R − 1))`, hence a standard error of `bound / sqrt(R − 1)`.
+fn absolute_floor(relative: f64, realizations: usize) -> f64 {
+    relative / (realizations as f64 - 1.0).sqrt()
 }
 
 /// Predicts the variance of `sampler` on `f` for every `N` of `ns`; a sheared sampler in its pattern's
@@ -526,6 +575,12 @@ pub fn predict_with_progress(
         let tail = (var_f - spec.total).max(0.0) / n as f64;
         let tail_stderr = var_f_stderr / n as f64;
         rho.push(relative_error(spec, res, n, cfg.method));
+        let cone_rounding = per.cone_errors.clone();
+        let grid_rounding: f64 = cone_rounding.iter().sum();
+        // The tail's difference of two sums of `terms` non-negative values (and Var(f)'s own
+        // rounding) errs by `(terms + 2) u Var(f)`.
+        let terms = spec.active.iter().map(Vec::len).sum::<usize>() as f64;
+        let tail_rounding = (terms + 2.0) * (f64::EPSILON / 2.0) * var_f / n as f64;
         points.push(VariancePoint {
             n,
             res,
@@ -536,26 +591,40 @@ pub fn predict_with_progress(
             tail_stderr,
             cones,
             cone_stderr,
+            rounding: grid_rounding + tail_rounding,
+            cone_rounding,
         });
     }
     let nf: Vec<f64> = ns.iter().map(|&n| n as f64).collect();
-    let fit = {
+    // A value within its rounding has no slope: its logarithm would be rounding's.
+    let fit = (!points.iter().any(VariancePoint::is_rounding)).then(|| {
         let v: Vec<f64> = points.iter().map(|p| p.variance).collect();
         let se: Vec<f64> = points.iter().map(|p| p.stderr).collect();
         let floor: Vec<f64> = points
             .iter()
             .zip(&rho)
-            .map(|(p, &r)| stderr_floor(r, cfg.realizations, p.grid / p.variance))
+            .map(|(p, &r)| {
+                stderr_floor(r, cfg.realizations, p.grid / p.variance)
+                    + absolute_floor(p.rounding / p.variance, cfg.realizations)
+            })
             .collect();
         fit_power_law(&nf, &v, &se, &floor).ok()
-    };
+    });
+    let fit = fit.flatten();
     let cone_fits = (0..cfg.cones)
         .map(|c| {
+            if points.iter().any(|p| p.cones[c] <= p.cone_rounding[c]) {
+                return None;
+            }
             let v: Vec<f64> = points.iter().map(|p| p.cones[c]).collect();
             let se: Vec<f64> = points.iter().map(|p| p.cone_stderr[c]).collect();
             let floor: Vec<f64> = rho
                 .iter()
-                .map(|&r| stderr_floor(r, cfg.realizations, 1.0))
+                .zip(&points)
+                .map(|(&r, p)| {
+                    stderr_floor(r, cfg.realizations, 1.0)
+                        + absolute_floor(p.cone_rounding[c] / p.cones[c], cfg.realizations)
+                })
                 .collect();
             fit_power_law(&nf, &v, &se, &floor).ok()
         })

@@ -1027,7 +1027,11 @@ fn compare_rejects_bad_numbers_and_clashing_names_before_any_work() {
         ),
         (
             |c| c.analytic[0].label = "!!!".into(),
-            "'!!!' has no letter or digit",
+            "'!!!' has no ASCII letter or digit",
+        ),
+        (
+            |c| c.analytic[0].label = "a".repeat(300),
+            "makes a file name part of 300 characters",
         ),
         (
             |c| c.classical = vec!["random".into(), "random".into()],
@@ -3589,5 +3593,45 @@ fn an_interrupted_gallery_leaves_no_temporary() {
             "interrupted after {} ms: {left:?}",
             5 + 10 * i
         );
+    }
+}
+
+/// A cache folder chosen by `$ANISOSPEC_CACHE` that is a file is refused before any work, naming the
+/// variable (not a `--cache` flag the user never gave), by every command that caches a reference:
+/// render, compare, and converge on a pixel (which only warned after the work before).
+#[test]
+fn a_cache_variable_that_names_a_file_is_refused_by_name() {
+    let (dir, exr) = tmp("out.exr");
+    let file = dir.path().join("not-a-folder");
+    std::fs::write(&file, "x").unwrap();
+    let csv = dir.path().join("out.csv");
+    let report = dir.path().join("report");
+    let render = ["render", "--sampler", "sobol", "--ref-count", "1024", "-o"];
+    let converge = [
+        "converge",
+        "--sampler",
+        "random",
+        "--integrand",
+        "pixel:px=1,py=1,refcount=1024",
+        "-n",
+        "16",
+        "--realizations",
+        "4",
+        "--output",
+    ];
+    for (args, out) in [
+        (&render[..], &exr),
+        (&converge[..], &csv),
+        (&["compare", "--out"][..], &report),
+    ] {
+        let mut args = args.to_vec();
+        args.push(out.to_str().unwrap());
+        let o = Command::new(env!("CARGO_BIN_EXE_anisospec"))
+            .args(&args)
+            .env("ANISOSPEC_CACHE", &file)
+            .output()
+            .unwrap();
+        refused(&o, &args, "give $ANISOSPEC_CACHE a folder path", out);
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
     }
 }

@@ -50,10 +50,9 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         out!("{}", config.to_toml()?);
         return Ok(());
     }
-    let cache = args
-        .cache
-        .clone()
-        .unwrap_or_else(crate::render::pixel::default_cache_dir);
+    let (cache, cache_source) = crate::render::pixel::cache_dir_and_source(args.cache.as_deref());
+    // Checked here too, before `run` checks it as `--cache`, to name $ANISOSPEC_CACHE when it chose.
+    crate::output::check_folder(&cache, cache_source, "cache")?;
     let started = std::time::Instant::now();
     let outcome = compare::run(&config, &args.out, &cache)?;
     eprintln!(

@@ -8,7 +8,7 @@ use crate::render::image::{
     DEFAULT_IMAGE_REF_COUNT,
 };
 use crate::render::oracle::{oracle_image, require_aperture};
-use crate::render::pixel::default_cache_dir;
+use crate::render::pixel::cache_dir_and_source;
 use crate::render::Scene;
 use crate::samplers;
 use std::path::PathBuf;
@@ -93,7 +93,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if !args.reference {
         check_rays(w * h, args.spp, "--spp")?;
     }
-    let cache = args.cache.clone().unwrap_or_else(default_cache_dir);
+    let (cache, cache_source) = cache_dir_and_source(args.cache.as_deref());
     let mut inputs: Vec<PathBuf> = args.scene.iter().cloned().collect();
     inputs.extend(samplers::input_files(
         args.sampler.as_deref().unwrap_or_default(),
@@ -103,7 +103,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     crate::output::check_outputs(&[exr, png], &inputs)?;
     // The reference is written to the cache once computed (45 s on the built-in scene): a cache path
     // that is a file is refused before that work, as compare refuses it.
-    crate::output::check_folder(&cache, "--cache", "cache")?;
+    crate::output::check_folder(&cache, cache_source, "cache")?;
     let reference_of = |what: &str| {
         let bar = crate::progress::bar(h as u64, what);
         reference_image(&scene, args.ref_count, Some(&cache), &bar)
@@ -112,12 +112,16 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let start = Instant::now();
         let r = reference_of("reference image")?;
         write_image_pair(exr, png, w, h, &[("Y", &r.value), ("stderr", &r.stderr)])?;
+        let cached = if r.cached {
+            format!("cached in {}", cache.display())
+        } else {
+            format!("not cached in {}: see the warning above", cache.display())
+        };
         outln!(
-            "reference {w}x{h} at {} rays per pixel in {:.2} s (cached in {}); mean squared standard \
+            "reference {w}x{h} at {} rays per pixel in {:.2} s ({cached}); mean squared standard \
              error {:.3e}; wrote {} and {}",
             r.count,
             start.elapsed().as_secs_f64(),
-            cache.display(),
             r.noise_floor(),
             exr.display(),
             png.display()

@@ -588,15 +588,26 @@ fn misplaced_key_hint(message: &str) -> Option<String> {
     })
 }
 
+/// Longest file-name part a label may make ([`super::report::slug`], bytes): the report's longest
+/// file name adds `convergence_` and `.png`, a table's cache file `_n{N}_{hash:016x}.json`, and a
+/// file name may have 255 bytes.
+const MAX_FILE_LABEL: usize = 200;
+
 /// Refuses two of `labels` (`what`, e.g. `samplers`) that are equal or that make the same file name
 /// in the report (which keeps only letters and digits: `edge a` and `edge-a` are both `edge_a`),
-/// naming both.
+/// naming both, and a label whose file name would be too long ([`MAX_FILE_LABEL`]).
 pub fn check_file_names(labels: &[String], what: &str) -> Result<()> {
     for (i, a) in labels.iter().enumerate() {
         let slug = super::report::slug(a);
         if slug.is_empty() {
             return Err(Error::Usage(format!(
-                "{what}: '{a}' has no letter or digit, and the report names its files after them (plots/convergence_.png); give it a label with a letter or digit"
+                "{what}: '{a}' has no ASCII letter or digit, and the report names its files after them keeping only those (plots/convergence_.png); give it a label with an ASCII letter or digit"
+            )));
+        }
+        if slug.len() > MAX_FILE_LABEL {
+            return Err(Error::Usage(format!(
+                "{what}: '{a}' makes a file name part of {} characters, and the report (and the table cache, for a table's target file) names files after it, which file systems cap at 255 bytes; shorten it (for a table, its target file's name) to at most {MAX_FILE_LABEL} characters",
+                slug.len()
             )));
         }
         if let Some(b) = labels[..i].iter().find(|b| super::report::slug(b) == slug) {

@@ -137,6 +137,9 @@ pub struct ReferenceImage {
     pub stderr: Vec<f64>,
     /// Rays per pixel.
     pub count: usize,
+    /// Whether the image is in the cache folder now (read from it, or written to it); false without
+    /// a cache folder or when writing it failed (a warning says why).
+    pub cached: bool,
 }
 
 impl ReferenceImage {
@@ -197,17 +200,19 @@ pub fn reference_image(
         .collect();
     progress.finish_and_clear();
     let pairs = rows.concat();
-    let img = ReferenceImage {
+    let mut img = ReferenceImage {
         value: pairs.iter().map(|p| p.0).collect(),
         stderr: pairs.iter().map(|p| p.1).collect(),
         count,
+        cached: false,
     };
     if let Some(f) = file {
         let data: Vec<f64> = pairs.iter().flat_map(|&(v, s)| [v, s]).collect();
         // As for a pixel's reference: a cache that cannot be written costs the next run the work,
         // not this run its result.
-        if let Err(e) = crate::output::write_npy(&f, &[h, w, 2], &data) {
-            eprintln!("warning: the reference image was computed but not cached: {e}");
+        match crate::output::write_npy(&f, &[h, w, 2], &data) {
+            Ok(()) => img.cached = true,
+            Err(e) => eprintln!("warning: the reference image was computed but not cached: {e}"),
         }
     }
     Ok(img)
@@ -225,6 +230,7 @@ fn read_reference(file: &Path, pixels: usize, count: usize) -> Option<ReferenceI
         value: data.iter().step_by(2).copied().collect(),
         stderr: data.iter().skip(1).step_by(2).copied().collect(),
         count,
+        cached: true,
     })
 }
 

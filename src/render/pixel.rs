@@ -30,9 +30,20 @@ const SOBOL_MAX: usize = 1 << 16;
 /// The folder references are cached in: `$ANISOSPEC_CACHE` if set and not empty, else `out/cache`
 /// (an empty value is taken as unset, as shells often leave it).
 pub fn default_cache_dir() -> PathBuf {
-    std::env::var_os("ANISOSPEC_CACHE")
-        .filter(|v| !v.is_empty())
-        .map_or_else(|| PathBuf::from("out/cache"), PathBuf::from)
+    cache_dir_and_source(None).0
+}
+
+/// The cache folder a command uses, and where that choice came from, to name in a message about
+/// it: `given` (a `--cache` flag), else `$ANISOSPEC_CACHE` when set and non-empty, else `out/cache`
+/// (named as `--cache`, the flag that chooses another).
+pub fn cache_dir_and_source(given: Option<&std::path::Path>) -> (PathBuf, &'static str) {
+    if let Some(dir) = given {
+        return (dir.to_path_buf(), "--cache");
+    }
+    match std::env::var_os("ANISOSPEC_CACHE").filter(|v| !v.is_empty()) {
+        Some(dir) => (PathBuf::from(dir), "$ANISOSPEC_CACHE"),
+        None => (PathBuf::from("out/cache"), "--cache"),
+    }
 }
 
 /// Checks a reference count: a power of two from `2^10` to `2^24`.
@@ -226,7 +237,8 @@ impl Integrand for PixelIntegrand {
 /// Parses the parameters of a `pixel:` integrand, `px=…,py=…[,scene=FILE][,refcount=N]` (the
 /// `pixel:` prefix may be included): the pixel's column and row, an optional TOML scene file, and the
 /// reference count (default [`DEFAULT_PIXEL_REF_COUNT`]). References are cached in
-/// [`default_cache_dir`].
+/// [`default_cache_dir`]; a file there is refused ([`Error::Usage`], naming `$ANISOSPEC_CACHE` when it
+/// chose the folder).
 pub fn parse_pixel_spec(params: &str) -> Result<Box<dyn Integrand>> {
     let body = params.strip_prefix("pixel:").unwrap_or(params);
     let (mut px, mut py, mut scene, mut count) = (None, None, None, DEFAULT_PIXEL_REF_COUNT);
@@ -261,6 +273,10 @@ pub fn parse_pixel_spec(params: &str) -> Result<Box<dyn Integrand>> {
         (Some(a), Some(b)) => (a, b),
         _ => return Err(usage("both px and py are needed".into())),
     };
+    // The reference goes to the cache once computed: a cache path that is a file is refused before
+    // that work, as render and compare refuse it.
+    let (cache, source) = cache_dir_and_source(None);
+    crate::output::check_folder(&cache, source, "cache")?;
     let scene = Arc::new(Scene::load(scene.as_deref())?);
     let label = format!("pixel:{}", body.trim());
     Ok(Box::new(

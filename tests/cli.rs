@@ -2954,6 +2954,24 @@ fn variance_with_a_shear_refuses_what_it_cannot_pull_back() {
         "so that K is at most 1024",
         &out,
     );
+    // A grid that grows with N past the limit only at the last N is refused before the first N's
+    // million realizations (minutes of work before the check ran per N), sheared or not.
+    let growing = |sheared: bool| {
+        let ns = if sheared { "16,576" } else { "16,65536" };
+        let mut a = vec!["variance", "--sampler", "padded-mj", "-n", ns];
+        a.extend(["--integrand", "sheared:s=0.5@xu", "--res-per-n", "4"]);
+        a.extend(["--realizations", "1000000", "-o", o]);
+        if sheared {
+            a.extend(["--shear", "0.5,0.5"]);
+        }
+        a
+    };
+    rejects(&growing(true), "so that K is at most 1024", &out);
+    rejects(
+        &growing(false),
+        "coefficients the prediction evaluates",
+        &out,
+    );
     let run = anisospec(&with(&["--integrand", "sheared:s=0.5@xu", "--res", "64"]));
     assert!(
         run.status.success(),

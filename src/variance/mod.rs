@@ -161,14 +161,38 @@ fn planes_of(f: &dyn Integrand) -> Result<Vec<Projection>> {
     })
 }
 
-fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spectrum> {
-    let planes = planes_of(f)?;
-    if res.saturating_mul(res).saturating_mul(planes.len()) > MAX_GRID {
+/// Refuses a `res × res` grid on `planes` planes beyond [`MAX_GRID`] coefficients.
+fn check_grid(res: usize, planes: usize) -> Result<()> {
+    if res.saturating_mul(res).saturating_mul(planes) > MAX_GRID {
         return Err(Error::Usage(format!(
-            "a {res} x {res} frequency grid on {} plane(s) is more than the {MAX_GRID} coefficients the prediction evaluates; lower --res or --res-per-n",
-            planes.len()
+            "a {res} x {res} frequency grid on {planes} plane(s) is more than the {MAX_GRID} coefficients the prediction evaluates; lower --res or --res-per-n"
         )));
     }
+    Ok(())
+}
+
+/// The side `m` of the grid a sheared sampler's pulled-back integrand is sampled on for a
+/// `res × res` frequency grid (`max(256, 4K)`, rounded up to a power of two); refused beyond
+/// [`MAX_PULLBACK_SAMPLES`].
+fn pullback_samples(res: usize) -> Result<usize> {
+    // Saturating: a grid beyond the limit is refused below, whatever --res-per-n asked for.
+    let m = res
+        .saturating_mul(4)
+        .max(256)
+        .checked_next_power_of_two()
+        .unwrap_or(usize::MAX);
+    if m > MAX_PULLBACK_SAMPLES {
+        return Err(Error::Usage(format!(
+            "a sheared sampler's prediction samples the pulled-back integrand on {m} x {m} points for a {res} x {res} frequency grid, more than the largest, {MAX_PULLBACK_SAMPLES} x {MAX_PULLBACK_SAMPLES}; lower --res or --res-per-n so that K is at most {}",
+            MAX_PULLBACK_SAMPLES / 4
+        )));
+    }
+    Ok(m)
+}
+
+fn integrand_spectrum(f: &dyn Integrand, res: usize, cones: usize) -> Result<Spectrum> {
+    let planes = planes_of(f)?;
+    check_grid(res, planes.len())?;
     let dims = f.dims();
     let mut active = Vec::with_capacity(planes.len());
     for (pi, p) in planes.iter().enumerate() {
@@ -226,18 +250,7 @@ fn pulled_back_spectrum(
             p.name()
         )));
     }
-    // Saturating: a grid beyond the limit is refused below, whatever --res-per-n asked for.
-    let m = res
-        .saturating_mul(4)
-        .max(256)
-        .checked_next_power_of_two()
-        .unwrap_or(usize::MAX);
-    if m > MAX_PULLBACK_SAMPLES {
-        return Err(Error::Usage(format!(
-            "a sheared sampler's prediction samples the pulled-back integrand on {m} x {m} points for a {res} x {res} frequency grid, more than the largest, {MAX_PULLBACK_SAMPLES} x {MAX_PULLBACK_SAMPLES}; lower --res or --res-per-n so that K is at most {}",
-            MAX_PULLBACK_SAMPLES / 4
-        )));
-    }
+    let m = pullback_samples(res)?;
     let mut active = Vec::with_capacity(planes.len());
     for p in &planes {
         let s = if *p == Projection::XU {
@@ -543,18 +556,26 @@ pub fn predict_with_progress(
         value: var_f,
         stderr: var_f_stderr,
     } = variance_reference(f);
+    // The grid side at each N; the largest is checked before any N's work.
+    let res_of = |n: usize| {
+        cfg.res_per_n
+            // Saturating: a grid beyond the limit is refused by the checks below.
+            .map_or(cfg.res, |m| {
+                cfg.res
+                    .max(m.saturating_mul(n).div_ceil(2).saturating_mul(2))
+            })
+    };
+    let largest = ns.iter().map(|&n| res_of(n)).max().unwrap_or(cfg.res);
+    check_grid(largest, planes.len())?;
+    if frame.is_some() {
+        pullback_samples(largest)?;
+    }
     let mut points = Vec::with_capacity(ns.len());
     // Per N, the relative error of each realization's values ([`relative_error`]).
     let mut rho = Vec::with_capacity(ns.len());
     let mut spec: Option<(usize, Spectrum)> = None;
     for &n in ns {
-        let res = cfg
-            .res_per_n
-            // Saturating: a grid beyond the limit is refused by the spectrum's own check.
-            .map_or(cfg.res, |m| {
-                cfg.res
-                    .max(m.saturating_mul(n).div_ceil(2).saturating_mul(2))
-            });
+        let res = res_of(n);
         if spec.as_ref().is_none_or(|s| s.0 != res) {
             // The bar counts realizations; say what runs before them (a fan's coefficients on a
             // 1024 x 1024 grid take minutes).

@@ -270,6 +270,45 @@ fn check_n_names_the_nearest_valid_n() {
     ));
 }
 
+/// Near the coordinate limit (2^28 coordinates), the N a refusal names is one the sampler allows
+/// and within the limit, for every sampler in 2D and 4D (jittered in 4D named 91^4, past the limit,
+/// before).
+#[test]
+fn the_nearest_n_named_near_the_coordinate_limit_is_usable() {
+    let names_4d = NAMES_4D
+        .iter()
+        .map(|n| n.to_string())
+        .chain(NAMES_2D.iter().map(|n| format!("padded-{n}")));
+    let all = NAMES_2D
+        .iter()
+        .map(|n| (n.to_string(), 2))
+        .chain(names_4d.map(|n| (n, 4)));
+    let mut checked = 0;
+    for (name, dims) in all {
+        let s = build(&name, dims).unwrap();
+        let largest = anisospec::points::MAX_COORDINATES / dims;
+        for n in [largest - 1, largest - 12345] {
+            let Err(e) = validate_n(s.as_ref(), n) else {
+                continue;
+            };
+            let msg = e.to_string();
+            let Some(named) = msg
+                .split("the nearest N it allows is ")
+                .nth(1)
+                .and_then(|t| t.split(|c: char| !c.is_ascii_digit()).next())
+                .and_then(|t| t.parse::<usize>().ok())
+            else {
+                continue; // refused for another reason (a parameter at this N), not for N itself
+            };
+            assert!(named <= largest, "{name} {dims}D N={n}: {msg}");
+            assert_eq!(s.check_n(named), Ok(()), "{name} {dims}D N={n}: {msg}");
+            checked += 1;
+        }
+    }
+    // Jittered, MJ, Sobol, OA and their padded forms refuse these N: the test has cases.
+    assert!(checked >= 8, "{checked} refusals checked");
+}
+
 #[test]
 fn poisson_keeps_the_requested_radius() {
     let sampler = Poisson::default();

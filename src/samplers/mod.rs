@@ -89,6 +89,16 @@ pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
     }
     coordinate_count(1, n, sampler.dims()).map_err(Error::Usage)?;
     sampler.check_n(n).map_err(|nearest| {
+        let largest = crate::points::MAX_COORDINATES / sampler.dims();
+        let nearest = if nearest > largest {
+            // The nearest is past the coordinate limit: name the largest allowed within it.
+            allowed_at_most(sampler, largest).map_or_else(
+                || format!("{nearest}, past the limit of {largest} points"),
+                |m| format!("{m} (the nearer {nearest} is past the limit of {largest} points)"),
+            )
+        } else {
+            nearest.to_string()
+        };
         Error::Usage(format!(
             "{} cannot make {n} point{}; the nearest N it allows is {nearest}",
             sampler.name(),
@@ -96,6 +106,21 @@ pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
         ))
     })?;
     sampler.check_parameters(n)
+}
+
+/// The largest N at most `limit` that `sampler` allows, if any: from `limit` down, each step
+/// mirrors the nearest allowed N above the current guess to below it, so the next nearest is the
+/// allowed N below.
+fn allowed_at_most(sampler: &dyn Sampler, limit: usize) -> Option<usize> {
+    let mut guess = limit;
+    while guess > 0 {
+        match sampler.check_n(guess) {
+            Ok(()) => return Some(guess),
+            Err(nearest) if nearest <= limit => return Some(nearest),
+            Err(nearest) => guess = guess.checked_sub(nearest.saturating_sub(guess) + 1)?,
+        }
+    }
+    None
 }
 
 /// The first sampler of `built` that repeats an earlier one (the same built name: one sampler given

@@ -109,7 +109,9 @@ impl Sheared {
         }
         if !(sx.abs() <= MAX_SHEAR && sy.abs() <= MAX_SHEAR) {
             return Err(Error::Usage(format!(
-                "shear ({sx:?}, {sy:?}) is not a finite shear of magnitude at most {MAX_SHEAR:e}; give shears for xu and yv in that range (beyond it the sheared coordinates lose their precision)"
+                "shear ({}, {}) is not a finite shear of magnitude at most {MAX_SHEAR:e}; give shears for xu and yv in that range (beyond it the sheared coordinates lose their precision)",
+                crate::error::number(sx),
+                crate::error::number(sy)
             )));
         }
         Ok(Self {

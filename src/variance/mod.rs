@@ -245,7 +245,7 @@ fn pulled_back_spectrum(
         .find(|p| **p != Projection::XU && **p != Projection::YV)
     {
         return Err(Error::Usage(format!(
-            "{} has spectrum on the {} plane; the prediction for a sheared sampler needs an integrand on the xu and yv planes (the shear moves x with u and y with v), e.g. sheared:s=0.5@xu; predict the unsheared sampler, or measure it with `anisospec converge`",
+            "{} has spectrum on the {} plane; the prediction for a sheared sampler needs an integrand on the xu and yv planes, in that order (the shear moves x with u and y with v; @ux and @vy swap the axes: write the integrand for @xu or @yv), e.g. sheared:s=0.5@xu; predict the unsheared sampler, or measure it with `anisospec converge`",
             f.name(),
             p.name()
         )));

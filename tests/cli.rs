@@ -2225,14 +2225,16 @@ fn converge_refuses_a_sampler_listed_twice() {
 }
 
 /// A point count that is not a positive integer is named as such (not taken for an unknown flag), in
-/// every command that takes one; a list of N that repeats one is refused.
+/// every command that takes one; a list of N that repeats one is refused; a count the sampler cannot
+/// make names the flag that set it.
 #[test]
 fn counts_must_be_positive_and_distinct() {
     let (_dir, out) = tmp("x.npy");
     let o = out.to_str().unwrap();
     let csv = out.with_extension("csv");
     let c = csv.to_str().unwrap();
-    let cases: [(Vec<&str>, &str, &Path); 9] = [
+    let exr = out.with_extension("exr");
+    let cases: [(Vec<&str>, &str, &Path); 10] = [
         (
             vec!["sample", "--sampler", "mj", "-n", "-5", "-o", o],
             "a point count must be a positive integer (1 or more), not -5",
@@ -2282,6 +2284,17 @@ fn counts_must_be_positive_and_distinct() {
             vec!["render", "--sampler", "padded-mj", "--spp", "-4", "-o", o],
             "a point count must be a positive integer",
             &out,
+        ),
+        (
+            vec![
+                "render",
+                "--sampler",
+                "jittered",
+                "-o",
+                exr.to_str().unwrap(),
+            ],
+            "--spp 64: jittered cannot make 64 points; the nearest N it allows is 81",
+            &exr,
         ),
         (
             vec![

@@ -35,8 +35,8 @@ pub struct PixelSpectrumArgs {
     /// (see --average), which gives the k_other = 0 slice of the 4D spectrum.
     #[arg(long, default_value = "xu")]
     pub proj: String,
-    /// Frequency grid size K (even): the integrand is sampled on a K x K grid of cell centres and
-    /// k1, k2 run over -K/2..K/2-1. K² · M² (with M of --average) is at most 1073741824 ray casts
+    /// Frequency grid size K (even, from 2 to 8192): the integrand is sampled on a K x K grid of cell
+    /// centres and k1, k2 run over -K/2..K/2-1. K² · M² (with M of --average) is at most 1073741824 ray casts
     /// (2^30, e.g. K = 128 with M = 256, or K = 1024 with M = 32). A pixel's edges alias, most near
     /// the border and where |f̂|² is small (pixel 30,40 at K = 64 against K = 512: -1 % at k = (12, 0),
     /// -5 % at (10, -7), +17 % at (5, 3), -13 % at (30, -21), 2.5 times at (31, 0)); for values up to

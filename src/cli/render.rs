@@ -130,7 +130,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let name = args.sampler.as_deref().unwrap_or_default();
     let sampler = samplers::build(name, 4)?;
-    samplers::validate_n(sampler.as_ref(), args.spp)?;
+    samplers::validate_n(sampler.as_ref(), args.spp).map_err(|e| match e {
+        Error::Usage(m) => Error::Usage(format!("--spp {}: {m}", args.spp)),
+        other => other,
+    })?;
     let shears = if args.shear {
         require_aperture(&scene, "--shear")?;
         Some(oracle_shears(

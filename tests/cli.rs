@@ -2143,12 +2143,25 @@ fn optimize_seeds_with_1_by_default() {
 }
 
 /// A rank-1 lattice whose generating vector shares a factor with N (0 included) would repeat points or
-/// values in a coordinate: refused in every command, naming the entry and a coprime one.
+/// values in a coordinate: refused in every command, naming the entry and a coprime one. An entry
+/// past u64 is named as too large, not as "not a whole number".
 #[test]
 fn degenerate_lattice_generators_are_refused() {
     let (_dir, out) = tmp("l.npy");
     let o = out.to_str().unwrap();
-    let cases: [(Vec<&str>, &str); 4] = [
+    let cases: [(Vec<&str>, &str); 5] = [
+        (
+            vec![
+                "sample",
+                "--sampler",
+                "lattice:18446744073709551617:3",
+                "-n",
+                "8",
+                "-o",
+                o,
+            ],
+            "'18446744073709551617' is above the largest entry, 18446744073709551615",
+        ),
         (
             vec!["sample", "--sampler", "lattice:0:0", "-n", "8", "-o", o],
             "the entry 0 for x shares the factor 8 with N = 8",

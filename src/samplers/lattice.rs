@@ -174,9 +174,12 @@ impl GivenLattice {
             .split(':')
             .map(|t| {
                 t.trim().parse::<u64>().map_err(|_| {
-                    Error::Usage(format!(
-                        "lattice:{spec}: '{t}' is not a whole number >= 0; {form}"
-                    ))
+                    let what = if t.trim().parse::<u128>().is_ok() {
+                        format!("is above the largest entry, {}", u64::MAX)
+                    } else {
+                        "is not a whole number >= 0".to_string()
+                    };
+                    Error::Usage(format!("lattice:{spec}: '{t}' {what}; {form}"))
                 })
             })
             .collect::<Result<Vec<u64>>>()?;

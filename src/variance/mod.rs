@@ -492,11 +492,12 @@ fn relative_error(spec: &Spectrum, res: usize, n: usize, method: Method) -> f64 
 /// bin's `F` errs by at most `ρ_F N` ([`crate::spectrum::exact::sum_error`]), so `P` by
 /// `(2 |F| ρ_F N + ρ_F² N²) / N = 2 ρ_F sqrt(P N) + ρ_F² N`. Full-grid NUFFT sums (`nufft_eps`) err by
 /// `10 · eps` relative down to 1e-3 of the mean power, about 1 (the mean of `P` over all frequencies
-/// is 1 for distinct points), so by at most `10 · eps · max(P, 1e-3)` (taken as absolute below 1e-3).
+/// is 1 for distinct points), so by about `10 · eps · 1e-3` absolute at bins below that; their error
+/// relative to `P` above it is [`relative_error`]'s.
 fn bin_error(p: f64, n: usize, rho_f: f64, nufft_eps: Option<f64>) -> f64 {
     let n = n as f64;
     let rounding = 2.0 * rho_f * (p.max(0.0) * n).sqrt() + rho_f * rho_f * n;
-    nufft_eps.map_or(rounding, |eps| rounding.max(10.0 * eps * p.max(1e-3)))
+    nufft_eps.map_or(rounding, |eps| rounding.max(10.0 * eps * 1e-3))
 }
 
 /// The floor of a point's relative standard error ([`fit_power_law`]) when each realization's value

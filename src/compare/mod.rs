@@ -49,6 +49,8 @@ pub struct Subject {
 pub struct SubjectInfo {
     /// Name in the report.
     pub label: String,
+    /// The integrand's own name, its definition (`sheared:s=0.5,c=0.7@xu`, `pixel:px=33,py=32`).
+    pub definition: String,
     /// `analytic`, or the pixel class.
     pub class: String,
     /// The shear `(sx, sy)` the samplers use ([`Subject::shear`]).
@@ -329,6 +331,7 @@ pub fn run(config: &CompareConfig, out: &Path, cache_dir: &Path) -> Result<Outco
             .iter()
             .map(|s| SubjectInfo {
                 label: s.label.clone(),
+                definition: s.integrand.name(),
                 class: s.class.clone(),
                 shear: s.shear,
                 shear_range: s.shear_range,

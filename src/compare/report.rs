@@ -557,7 +557,8 @@ fn write_markdown(
         writeln!(w, "## Integrands\n")?;
         writeln!(
             w,
-            "Shears are in pixels per lens width. **Shear range** is the range of shears the integrand holds (for a \
+            "**Definition** is the integrand as `anisospec integrands` writes it (`converge --integrand` takes it as \
+             it is). Shears are in pixels per lens width. **Shear range** is the range of shears the integrand holds (for a \
              pixel, the oracle's smallest and largest shear over its footprint and the lens). **Samplers' shear** is \
              the one shear every sheared sampler of this report is sheared by and the tables are moved by (the \
              robustness study scales it): an analytic integrand's configured shear; an in-focus or hairline pixel's \
@@ -571,11 +572,12 @@ fn write_markdown(
         )?;
         writeln!(
             w,
-            "| integrand | class | integral | reference floor | shear range | samplers' shear (sx, sy) | oracle at the pixel centre (sx, sy) |"
+            "| integrand | definition | class | integral | reference floor | shear range | samplers' shear (sx, sy) | oracle at the pixel centre (sx, sy) |"
         )?;
-        writeln!(w, "|---|---|---|---|---|---|---|")?;
+        writeln!(w, "|---|---|---|---|---|---|---|---|")?;
         for SubjectInfo {
             label,
+            definition,
             class,
             shear,
             shear_range: range,
@@ -602,7 +604,7 @@ fn write_markdown(
             });
             writeln!(
                 w,
-                "| {label} | {class} | {integral} | {floor} | [{}, {}] | ({}, {}){midpoint} | {oracle} |",
+                "| {label} | `{definition}` | {class} | {integral} | {floor} | [{}, {}] | ({}, {}){midpoint} | {oracle} |",
                 shear_text(range.0),
                 shear_text(range.1),
                 shear_text(shear.0),
@@ -946,6 +948,11 @@ fn write_robustness_plot(path: &Path, outcome: &Outcome, label: &str) -> Result<
     // among the subject's studies.
     let studies = studies_of(outcome, label);
     let colour = |sampler: &str| studies.iter().position(|s| s.sampler == sampler);
+    let shear = outcome
+        .subjects
+        .iter()
+        .find(|s| s.label == label)
+        .map_or((0.0, 0.0), |s| s.shear);
     let mut series = Vec::new();
     let mut span = (f64::INFINITY, f64::NEG_INFINITY);
     for sampler in samplers {
@@ -958,8 +965,18 @@ fn write_robustness_plot(path: &Path, outcome: &Outcome, label: &str) -> Result<
         for r in &rows {
             span = (span.0.min(r.error), span.1.max(r.error));
         }
+        // A sampler whose estimates do not change with the error is not moved by the oracle here
+        // (a table kept unsheared on this integrand): its flat line is not robustness.
+        let unmoved = rows.len() > 1
+            && rows
+                .iter()
+                .all(|r| r.point.mse.to_bits() == rows[0].point.mse.to_bits());
         series.push(Series {
-            label: sampler.clone(),
+            label: if unmoved {
+                format!("{sampler} (not moved by the oracle here)")
+            } else {
+                sampler.clone()
+            },
             points: rows
                 .iter()
                 .map(|r| (r.error * 100.0, r.point.mse))
@@ -987,8 +1004,12 @@ fn write_robustness_plot(path: &Path, outcome: &Outcome, label: &str) -> Result<
                 c.ns.get(at).unwrap_or(&0),
                 c.realizations
             ),
-            x_label: "error of the samplers' shear, % (they shear by it × (1 + error))".into(),
-            y_label: "MSE (squared integrand units)".into(),
+            x_label: format!(
+                "error of the samplers' shear, % (they shear by it × (1 + error); 0 % is (sx, sy) = ({}, {}))",
+                shear_text(shear.0),
+                shear_text(shear.1)
+            ),
+            y_label: "MSE (squared integrand units; bars: ±1 standard error)".into(),
             series,
             width: 1000,
             height: 700,

@@ -154,8 +154,8 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
                 })
                 .collect();
             let title = format!(
-                "Expected power spectra: {title}, {} realizations",
-                args.realizations
+                "Expected power spectra: {title}, K = {}, {} realizations",
+                args.res, args.realizations
             );
             write_sheet(&dir.join(file), &title, &panels, 5)?;
         }

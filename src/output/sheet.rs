@@ -51,27 +51,47 @@ fn footer_text() -> String {
         .to_string()
 }
 
-/// The frequencies that get a tick on an axis of `res` frequencies `−K/2 … K/2 − 1`: `±K/2`, `±K/4`
-/// and 0 (`K/2` is the edge just past the last frequency).
+/// The frequencies that get a tick on an axis of `res` frequencies `−K/2 … K/2 − 1`: both ends,
+/// `±K/4` and 0.
 fn ticks(res: usize) -> Vec<i64> {
     let half = (res / 2) as i64;
-    let mut t = vec![-half, -half / 2, 0, half / 2, half];
+    let mut t = vec![-half, -half / 2, 0, half / 2, half - 1];
     t.dedup();
     t
 }
 
-/// Pixel offset (from the picture's left or top edge) of the centre of frequency `k` along an axis of
-/// `res` frequencies drawn over [`PANEL`] pixels, with `up` for the `k2` axis (larger `k2` on top);
-/// clamped to the picture.
-fn tick_offset(k: i64, res: usize, up: bool) -> usize {
-    let half = (res / 2) as f64;
-    let index = if up {
-        half - 1.0 - k as f64
+/// The image index (row from the top, or column from the left, `0 … K − 1`) a pixel `offset` of a
+/// picture shows, for `res` frequencies over [`PANEL`] pixels: anchored at the centre, so that the
+/// pixels either side of it show the indices `K/2 − 1` and `K/2` (the rows `k2 = 0` and `−1`, the
+/// columns `k1 = −1` and `0`) at any `K`, also when a pixel spans several frequencies.
+fn index_at(offset: usize, res: usize) -> usize {
+    let (half_panel, half) = (PANEL / 2, res / 2);
+    if offset >= half_panel {
+        (half + (offset - half_panel) * res / PANEL).min(res - 1)
     } else {
-        k as f64 + half
-    };
-    let at = (index + 0.5) * PANEL as f64 / res as f64;
-    (at.round().max(0.0) as usize).min(PANEL - 1)
+        half.saturating_sub(1 + (half_panel - 1 - offset) * res / PANEL)
+    }
+}
+
+/// The image index of frequency `k` along an axis of `res` frequencies: the column `k + K/2` for
+/// `k1`, or with `up` the row `K/2 − 1 − k` for `k2` (larger `k2` on top).
+fn index_of(k: i64, res: usize, up: bool) -> usize {
+    let half = (res / 2) as i64;
+    (if up { half - 1 - k } else { k + half }) as usize
+}
+
+/// Pixel offset (from the picture's left or top edge) of the tick of frequency `k`: the middle of
+/// the pixels that show it, or, when no pixel does (more frequencies than pixels), the pixel showing
+/// the nearest index.
+fn tick_offset(k: i64, res: usize, up: bool) -> usize {
+    let want = index_of(k, res, up);
+    let showing: Vec<usize> = (0..PANEL).filter(|&o| index_at(o, res) == want).collect();
+    if let (Some(first), Some(last)) = (showing.first(), showing.last()) {
+        return (first + last) / 2;
+    }
+    (0..PANEL)
+        .min_by_key(|&o| index_at(o, res).abs_diff(want))
+        .unwrap_or(0)
 }
 
 /// A tick label: the frequency with a proper minus sign.
@@ -85,7 +105,7 @@ fn tick_label(k: i64) -> String {
 
 /// Writes `panels` in rows of `columns` under `title` (its long numbers shortened, as in plots, and
 /// wrapped at spaces to the sheet's width) as an RGB PNG. Each panel has tick marks and labels at
-/// frequencies `0, ±K/4, ±K/2` on both axes; under the panels a colour bar gives the tone map
+/// frequencies `−K/2, −K/4, 0, K/4, K/2 − 1` on both axes; under the panels a colour bar gives the tone map
 /// (P from 10^LOG_RANGE.0 to 10^LOG_RANGE.1, log scale) and a footer says how to read the axes.
 pub fn write_sheet(path: &Path, title: &str, panels: &[Panel], columns: usize) -> Result<()> {
     if panels.is_empty() || columns == 0 {
@@ -128,7 +148,7 @@ pub fn write_sheet(path: &Path, title: &str, panels: &[Panel], columns: usize) -
             let img = spectrum_image_rows(panel.values, panel.res);
             for y in 0..PANEL {
                 for x in 0..PANEL {
-                    let v = img[(y * panel.res / PANEL) * panel.res + x * panel.res / PANEL];
+                    let v = img[index_at(y, panel.res) * panel.res + index_at(x, panel.res)];
                     pixel(x0 + x, y0 + y, tone_map_log(v)).map_err(|e| fail(&e))?;
                 }
             }
@@ -194,37 +214,31 @@ pub fn write_sheet(path: &Path, title: &str, panels: &[Panel], columns: usize) -
 mod tests {
     use super::*;
 
-    /// The frequency a pixel offset of a picture shows, as the drawing loop maps pixels to bins.
-    fn frequency_at(offset: usize, res: usize, up: bool) -> i64 {
-        let index = (offset * res / PANEL) as i64;
-        let half = (res / 2) as i64;
-        if up {
-            half - 1 - index
-        } else {
-            index - half
-        }
-    }
-
     #[test]
-    fn every_tick_sits_on_the_pixels_of_its_frequency() {
-        for res in [4, 6, 32, 64, 100, 128, 256, 1000] {
-            let half = (res / 2) as i64;
+    fn every_tick_sits_on_the_pixels_of_its_frequency_and_zero_is_always_drawn() {
+        for res in [2, 4, 6, 32, 64, 100, 128, 256, 1000, 8192] {
             for up in [false, true] {
+                // k = 0 and its neighbour −1 are drawn whatever K (before, K = 1000 skipped the
+                // row k2 = 0).
+                let shown: Vec<usize> = (0..PANEL).map(|o| index_at(o, res)).collect();
+                for k in [0, -1] {
+                    assert!(
+                        shown.contains(&index_of(k, res, up)),
+                        "K={res} up={up} k={k}"
+                    );
+                }
                 for k in ticks(res) {
-                    let offset = tick_offset(k, res, up);
-                    if k == half {
-                        // Just past the last frequency K/2 − 1: the picture's far edge.
-                        assert_eq!(offset, if up { 0 } else { PANEL - 1 }, "K={res} up={up}");
+                    let at = index_at(tick_offset(k, res, up), res);
+                    if shown.contains(&index_of(k, res, up)) {
+                        assert_eq!(at, index_of(k, res, up), "K={res} k={k} up={up}");
                     } else {
-                        // Exact while a frequency gets a pixel or more; above PANEL frequencies a
-                        // pixel shows one of ceil(K / PANEL) and the tick is off by less than that.
-                        let off = (frequency_at(offset, res, up) - k).unsigned_abs() as usize;
-                        let allowed = if res <= PANEL {
-                            0
-                        } else {
-                            res.div_ceil(PANEL) - 1
-                        };
-                        assert!(off <= allowed, "K={res} k={k} up={up}: off by {off}");
+                        // Not drawn (a pixel spans several frequencies): the nearest drawn one,
+                        // within a pixel's span.
+                        let off = at.abs_diff(index_of(k, res, up));
+                        assert!(
+                            off <= res.div_ceil(PANEL),
+                            "K={res} k={k} up={up}: off by {off}"
+                        );
                     }
                 }
             }

@@ -173,7 +173,7 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
             ),
         },
         None if !at_rounding.is_empty() => outln!(
-            "no predicted slope: at N = {} the predicted variance is not above what f64 rounding and the spectrum method's tolerance can put into it, so its digits are not a value: the sampler's spectrum is 0 (a lattice on a smooth integrand) or, with the NUFFT, below its accuracy (about 10 eps / 1000) wherever the integrand has energy; --exact leaves f64 rounding alone",
+            "no predicted slope: at N = {} the predicted variance is not above what f64 rounding can put into it, so its digits are rounding, not a value: the sampler's spectrum is 0 wherever the integrand has energy (a lattice on a smooth integrand)",
             at_rounding.join(", ")
         ),
         None => outln!(

@@ -3642,7 +3642,8 @@ fn an_interrupted_gallery_leaves_no_temporary() {
 
 /// A cache folder chosen by `$ANISOSPEC_CACHE` that is a file is refused before any work, naming the
 /// variable (not a `--cache` flag the user never gave), by every command that caches a reference:
-/// render, compare, and converge on a pixel (which only warned after the work before).
+/// render, compare, and converge on a pixel (which only warned after the work before, and has no
+/// --cache flag to name).
 #[test]
 fn a_cache_variable_that_names_a_file_is_refused_by_name() {
     let (dir, exr) = tmp("out.exr");
@@ -3678,4 +3679,22 @@ fn a_cache_variable_that_names_a_file_is_refused_by_name() {
         refused(&o, &args, "give $ANISOSPEC_CACHE a folder path", out);
         assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
     }
+    // Without the variable, converge (which has no --cache flag) names the default folder and the
+    // variable that chooses another.
+    std::fs::create_dir(dir.path().join("out")).unwrap();
+    std::fs::write(dir.path().join("out/cache"), "x").unwrap();
+    let mut args = converge.to_vec();
+    args.push(csv.to_str().unwrap());
+    let o = Command::new(env!("CARGO_BIN_EXE_anisospec"))
+        .args(&args)
+        .current_dir(dir.path())
+        .env_remove("ANISOSPEC_CACHE")
+        .output()
+        .unwrap();
+    refused(
+        &o,
+        &args,
+        "the cache folder out/cache is a file, not a folder, so no cache folder can be written there; set $ANISOSPEC_CACHE to a folder path",
+        &csv,
+    );
 }

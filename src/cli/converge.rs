@@ -75,6 +75,11 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         .collect();
     crate::cli::distinct_counts(&args.n)?;
     crate::output::check_outputs(&outputs, &inputs)?;
+    // A pixel's reference goes to the cache once computed: a file in the cache's way is refused
+    // before that work.
+    if args.integrand.trim_start().starts_with("pixel:") {
+        crate::render::pixel::check_reference_cache()?;
+    }
     let f = parse(&args.integrand)?;
     if args.random_placement && f.placed(&mut crate::rng::stream(0, 0)).is_none() {
         return Err(crate::error::Error::Usage(format!(

@@ -33,6 +33,25 @@ pub fn default_cache_dir() -> PathBuf {
     cache_dir_and_source(None).0
 }
 
+/// Refuses a cache folder for pixel references that a file stands in the way of, for a command
+/// without a `--cache` flag, naming `$ANISOSPEC_CACHE` as the way to choose another: before the
+/// reference's work, as render and compare refuse their `--cache`.
+pub fn check_reference_cache() -> Result<()> {
+    let (dir, source) = cache_dir_and_source(None);
+    let flag = if source == "--cache" {
+        "the cache folder"
+    } else {
+        source
+    };
+    crate::output::check_folder(&dir, flag, "cache").map_err(|e| match e {
+        Error::Usage(m) if source == "--cache" => Error::Usage(m.replace(
+            &format!("give {flag} a folder path"),
+            "set $ANISOSPEC_CACHE to a folder path, or move the file",
+        )),
+        other => other,
+    })
+}
+
 /// The cache folder a command uses, and where that choice came from, to name in a message about
 /// it: `given` (a `--cache` flag), else `$ANISOSPEC_CACHE` when set and non-empty, else `out/cache`
 /// (named as `--cache`, the flag that chooses another).
@@ -237,8 +256,7 @@ impl Integrand for PixelIntegrand {
 /// Parses the parameters of a `pixel:` integrand, `px=…,py=…[,scene=FILE][,refcount=N]` (the
 /// `pixel:` prefix may be included): the pixel's column and row, an optional TOML scene file, and the
 /// reference count (default [`DEFAULT_PIXEL_REF_COUNT`]). References are cached in
-/// [`default_cache_dir`]; a file there is refused ([`Error::Usage`], naming `$ANISOSPEC_CACHE` when it
-/// chose the folder).
+/// [`default_cache_dir`] ([`check_reference_cache`] checks it).
 pub fn parse_pixel_spec(params: &str) -> Result<Box<dyn Integrand>> {
     let body = params.strip_prefix("pixel:").unwrap_or(params);
     let (mut px, mut py, mut scene, mut count) = (None, None, None, DEFAULT_PIXEL_REF_COUNT);
@@ -273,10 +291,6 @@ pub fn parse_pixel_spec(params: &str) -> Result<Box<dyn Integrand>> {
         (Some(a), Some(b)) => (a, b),
         _ => return Err(usage("both px and py are needed".into())),
     };
-    // The reference goes to the cache once computed: a cache path that is a file is refused before
-    // that work, as render and compare refuse it.
-    let (cache, source) = cache_dir_and_source(None);
-    crate::output::check_folder(&cache, source, "cache")?;
     let scene = Arc::new(Scene::load(scene.as_deref())?);
     let label = format!("pixel:{}", body.trim());
     Ok(Box::new(

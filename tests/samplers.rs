@@ -307,6 +307,20 @@ fn the_nearest_n_named_near_the_coordinate_limit_is_usable() {
     }
     // Jittered, MJ, Sobol, OA and their padded forms refuse these N: the test has cases.
     assert!(checked >= 8, "{checked} refusals checked");
+    // Several sets drawn together: the named N keeps all of them within the limit (3 sets of the
+    // nearer 44742721 points would not fit).
+    let jittered = build("jittered", 2).unwrap();
+    let msg = generate_sets(jittered.as_ref(), 44_739_240, 3, 1)
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("the nearest N it allows is 44729344"), "{msg}");
+    // The N a command substitutes for one the sampler cannot make (gallery, compare) is within the
+    // limit too: 90^4, not 91^4.
+    let jittered_4d = build("jittered", 4).unwrap();
+    assert_eq!(
+        anisospec::samplers::usable_n(jittered_4d.as_ref(), 67_108_863),
+        65_610_000
+    );
 }
 
 #[test]

@@ -80,6 +80,12 @@ pub struct ShearFrame<'a> {
 /// One set of `n` points must fit under [`crate::points::MAX_COORDINATES`]; the commands check every
 /// N here before drawing.
 pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
+    validate_n_of_sets(sampler, n, 1)
+}
+
+/// [`validate_n`] for `sets` sets of `n` points drawn together: the N a refusal names keeps all of
+/// them under [`crate::points::MAX_COORDINATES`].
+fn validate_n_of_sets(sampler: &dyn Sampler, n: usize, sets: usize) -> Result<()> {
     if n == 0 {
         return Err(Error::Usage(format!(
             "N = 0 asks for no points; {} needs at least one (e.g. N = {})",
@@ -89,7 +95,7 @@ pub fn validate_n(sampler: &dyn Sampler, n: usize) -> Result<()> {
     }
     coordinate_count(1, n, sampler.dims()).map_err(Error::Usage)?;
     sampler.check_n(n).map_err(|nearest| {
-        let largest = crate::points::MAX_COORDINATES / sampler.dims();
+        let largest = crate::points::MAX_COORDINATES / (sampler.dims() * sets.max(1));
         let nearest = if nearest > largest {
             // The nearest is past the coordinate limit: name the largest allowed within it.
             allowed_at_most(sampler, largest).map_or_else(
@@ -139,9 +145,14 @@ pub fn repeated(names: &[String], built: &[Box<dyn Sampler>]) -> Option<String> 
     })
 }
 
-/// `n` if the sampler allows it, else its nearest valid N.
+/// `n` if the sampler allows it, else its nearest valid N within the coordinate limit of one set.
 pub fn usable_n(sampler: &dyn Sampler, n: usize) -> usize {
-    sampler.check_n(n).map_or_else(|m| m, |_| n)
+    let largest = crate::points::MAX_COORDINATES / sampler.dims();
+    match sampler.check_n(n) {
+        Ok(()) => n,
+        Err(nearest) if nearest > largest => allowed_at_most(sampler, largest).unwrap_or(nearest),
+        Err(nearest) => nearest,
+    }
 }
 
 /// Draws `sets` independent sets of `n` points. Set `s` uses stream `s` of `seed`: the result does not
@@ -154,7 +165,7 @@ pub fn generate_sets(sampler: &dyn Sampler, n: usize, sets: usize, seed: u64) ->
         ));
     }
     coordinate_count(sets, n, sampler.dims()).map_err(Error::Usage)?;
-    validate_n(sampler, n)?;
+    validate_n_of_sets(sampler, n, sets)?;
     let all: Vec<Vec<f64>> = (0..sets)
         .into_par_iter()
         .map(|s| sampler.generate(n, &mut rng::stream(seed, s as u64)))

@@ -589,8 +589,8 @@ fn misplaced_key_hint(message: &str) -> Option<String> {
 }
 
 /// Longest file-name part a label may make ([`super::report::slug`], bytes): the report's longest
-/// file name adds `convergence_` and `.png`, a table's cache file `_n{N}_{hash:016x}.json`, and a
-/// file name may have 255 bytes.
+/// file name adds `convergence_` and `.png`, and a file name may have 255 bytes. (A table's cache
+/// file keeps at most 100 bytes of its target's name.)
 const MAX_FILE_LABEL: usize = 200;
 
 /// Refuses two of `labels` (`what`, e.g. `samplers`) that are equal or that make the same file name
@@ -606,7 +606,7 @@ pub fn check_file_names(labels: &[String], what: &str) -> Result<()> {
         }
         if slug.len() > MAX_FILE_LABEL {
             return Err(Error::Usage(format!(
-                "{what}: '{a}' makes a file name part of {} characters, and the report (and the table cache, for a table's target file) names files after it, which file systems cap at 255 bytes; shorten it (for a table, its target file's name) to at most {MAX_FILE_LABEL} characters",
+                "{what}: '{a}' makes a file name part of {} characters, and the report names files after it, which file systems cap at 255 bytes; shorten it (for a table, its target file's name) to at most {MAX_FILE_LABEL} characters",
                 slug.len()
             )));
         }

@@ -193,9 +193,17 @@ impl TableCache {
             self.sets,
             self.seed
         );
-        let stem = source
+        // At most 100 bytes of the target's name (the hash tells tables apart), so that the cache
+        // file's name stays within a file system's 255 bytes whatever the target is called.
+        let stem: String = source
             .file_stem()
-            .map_or_else(|| "table".into(), |s| s.to_string_lossy().into_owned());
+            .map_or_else(|| "table".into(), |s| s.to_string_lossy().into_owned())
+            .chars()
+            .scan(0, |bytes, c| {
+                *bytes += c.len_utf8();
+                (*bytes <= 100).then_some(c)
+            })
+            .collect();
         let path = self.dir.join(format!(
             "{stem}_n{n}_{:016x}.npy",
             crate::output::stable_hash(key.as_bytes())

@@ -175,7 +175,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
                 p.seconds
             );
         }
-        if let Some(note) = floor_note(&s.points, reference.stderr) {
+        if let Some(note) = crate::converge::floor_note(&s.points, reference.stderr) {
             outln!("{}: {note}", s.sampler);
         }
     }
@@ -237,60 +237,5 @@ fn warm_up(
         for &n in ns {
             s.generate(n, &mut crate::rng::substream(seed, u64::MAX, n as u64));
         }
-    }
-}
-
-/// Share of an MSE above which the reference floor is said to flatten it.
-const FLOOR_SHARE: f64 = 0.1;
-
-/// A note when a Monte Carlo reference's floor (`reference_stderr²`, which every MSE contains on
-/// average) is at least [`FLOOR_SHARE`] of the MSE at some `N`: the MSE there, and the fitted slope,
-/// measure the reference as much as the sampler.
-fn floor_note(points: &[crate::converge::ConvergePoint], reference_stderr: f64) -> Option<String> {
-    let floor = reference_stderr * reference_stderr;
-    let hit: Vec<String> = points
-        .iter()
-        .filter(|p| floor > 0.0 && floor >= FLOOR_SHARE * p.mse)
-        .map(|p| format!("{} ({:.0} %)", p.n, 100.0 * (floor / p.mse).min(1.0)))
-        .collect();
-    (!hit.is_empty()).then(|| {
-        format!(
-            "the reference floor {floor:.2e} is {} % or more of the MSE at N = {}, so those MSE and \
-             the slope through them are flattened by the reference's own error; raise the pixel's \
-             refcount (e.g. refcount=16777216) to lower the floor",
-            100.0 * FLOOR_SHARE,
-            hit.join(", ")
-        )
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::converge::ConvergePoint;
-
-    fn point(n: usize, mse: f64) -> ConvergePoint {
-        ConvergePoint {
-            n,
-            mse,
-            mse_stderr: 0.1 * mse,
-            mean_error: 0.0,
-            seconds: 0.0,
-            median_seconds: 0.0,
-            evaluations: 0,
-        }
-    }
-
-    #[test]
-    fn the_floor_note_names_the_n_whose_mse_the_reference_floor_flattens() {
-        // Reference stderr 1e-3: floor 1e-6, 1 % of the first MSE, 20 % of the second, all of the
-        // third.
-        let points = [point(16, 1e-4), point(64, 5e-6), point(256, 1e-6)];
-        let note = floor_note(&points, 1e-3).expect("a note");
-        assert!(note.contains("N = 64 (20 %), 256 (100 %)"), "{note}");
-        assert!(!note.contains("16 ("), "{note}");
-        // An exact reference, or one far below every MSE, has no floor worth a note.
-        assert_eq!(floor_note(&points, 0.0), None);
-        assert_eq!(floor_note(&points, 1e-5), None);
     }
 }

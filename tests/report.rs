@@ -315,10 +315,14 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             interval: interval(r),
         })
         .collect();
-    let subjects: Vec<(String, String)> = section("Integrands").rows[1..]
+    // Columns: label, definition, class, ...
+    let integrands = &section("Integrands").rows[1..];
+    let subjects: Vec<(String, String)> = integrands
         .iter()
-        .map(|r| (r[0].clone(), r[1].clone()))
+        .map(|r| (r[0].clone(), r[2].clone()))
         .collect();
+    assert_eq!(integrands[0][1], "`sheared:s=0.5,c=0.7@xu`");
+    assert!(integrands[1][1].starts_with("`pixel:px="), "{integrands:?}");
     assert_eq!(subjects.len(), 2, "{subjects:?}");
     // axes.json labels the npy arrays' axes: the integrands and samplers in the order of the
     // tables, the study's N.

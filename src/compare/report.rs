@@ -419,10 +419,16 @@ fn write_gallery(
             })
             .collect();
         let file = spectra_file(&spec.label(), "png");
-        let shear_note = if spec.family() == "classical" {
-            ""
-        } else {
-            ", at shear 0.5"
+        let shear_note = match spec {
+            SamplerSpec::Classical(_) => String::new(),
+            SamplerSpec::Table(target) => {
+                let framed = Target::load(target).map(|t| table_frame(t, GALLERY_SHEAR_RANGE));
+                format!(
+                    " (designed for {}), sheared by 0.5 (seam-free)",
+                    design_text(&framed)
+                )
+            }
+            _ => ", sheared by 0.5".to_string(),
         };
         write_sheet(
             &out.join(&file),
@@ -453,6 +459,40 @@ fn write_gallery(
         written.push((label, file));
     }
     Ok(written)
+}
+
+/// What a table's target, framed for an integrand's shear range ([`table_frame`]), is designed for, in
+/// words (the Tables section and the spectra gallery's titles).
+fn design_text(framed: &Result<Target>) -> String {
+    match framed {
+        Ok(Target::DoubleWedge(d)) => {
+            format!("double wedge, slopes {:.2} to {:.2}", d.s0, d.s1)
+        }
+        Ok(Target::Hairline(h)) => format!(
+            "hairline band, unsheared: half-width {}{}, length {} (in units of sqrt(N))",
+            crate::error::number(h.half_width),
+            if h.opening > 0.0 {
+                format!(
+                    ", opening {0} (a slope within ±{0} stays dark)",
+                    crate::error::number(h.opening)
+                )
+            } else {
+                ", no opening".to_string()
+            },
+            crate::error::number(h.length)
+        ),
+        Ok(Target::Variance(v)) => format!(
+            "variance of {} through shear {}{}",
+            v.integrand,
+            shear_text(v.shear),
+            match v.shear_error() {
+                0.0 => String::new(),
+                e => format!(" off by up to ±{}%", (e * 1000.0).round() / 10.0),
+            }
+        ),
+        Ok(t) => t.kind().to_string(),
+        Err(e) => format!("({e})"),
+    }
 }
 
 /// The index in `ns` of the largest N (where the robustness rows and the summary are measured).
@@ -763,14 +803,15 @@ fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io:
             write!(w, " {:.3e} ± {:.1e}{shown} |", p.mse, p.mse_stderr)?;
         }
         let p = &s.points[last];
+        let shown = other_n(p.n, nmax);
         writeln!(
             w,
-            " {} | {} | {:.3} | {:.2} | {} |",
+            " {} | {} | {:.3}{shown} | {:.2}{shown} | {}{shown} |",
             slope_text(s),
             local_slope_text(s),
             p.median_seconds * 1e3,
             s.setup_seconds[last],
-            gain_text(reference, p.mse) + &other_n(p.n, nmax)
+            gain_text(reference, p.mse)
         )?;
     }
     if let Some(classical) = classical {
@@ -1071,23 +1112,7 @@ fn write_tables(
             };
             let range = subject.shear_range;
             let framed = Target::load(target).map(|t| table_frame(t, range));
-            let design = match &framed {
-                Ok(Target::DoubleWedge(d)) => {
-                    format!("double wedge, slopes {:.2} to {:.2}", d.s0, d.s1)
-                }
-                Ok(Target::Hairline(_)) => "hairline band, unsheared".to_string(),
-                Ok(Target::Variance(v)) => format!(
-                    "variance of {} through shear {}{}",
-                    v.integrand,
-                    shear_text(v.shear),
-                    match v.shear_error() {
-                        0.0 => String::new(),
-                        e => format!(" off by up to ±{}%", (e * 1000.0).round() / 10.0),
-                    }
-                ),
-                Ok(t) => t.kind().to_string(),
-                Err(e) => format!("({e})"),
-            };
+            let design = design_text(&framed);
             // The start at each N, named once when it does not change with N.
             let starts: Vec<(usize, &str)> = c.ns.iter().map(|&n| (n, start_sampler(n))).collect();
             let start = if starts.windows(2).all(|p| p[0].1 == p[1].1) {

@@ -128,7 +128,13 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
                 dir.join(format!("{stem}.png")),
                 dir.join(format!("{stem}.npy")),
             ];
-            super::spectrum::write_spectrum(&spec, &outputs, &[ImageKind::Png, ImageKind::Npy])?;
+            let what = format!("{} in {}, seed {}", sampler.name(), proj.name(), args.seed);
+            super::spectrum::write_spectrum(
+                &spec,
+                &what,
+                &outputs,
+                &[ImageKind::Png, ImageKind::Npy],
+            )?;
             let profile = radial_profile(&spec, 8, method);
             write_radial_csv(&dir.join(format!("{stem}_radial.csv")), &profile)?;
             if !dark_noted {

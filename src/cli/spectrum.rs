@@ -138,7 +138,7 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
         .map(PathBuf::as_path)
         .collect();
     check_outputs(&outputs, &inputs)?;
-    let spec = match (&args.sampler, &args.input) {
+    let (spec, what) = match (&args.sampler, &args.input) {
         (Some(name), _) => {
             let sampler = sampler_with_shear(name, args.dims, &args.shear)?;
             let proj = Projection::parse(&args.proj, sampler.dims())?;
@@ -147,7 +147,9 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
             if let Some(note) = long_exact_note(n, args.res, r, method) {
                 eprintln!("{note}");
             }
-            of_sampler(sampler.as_ref(), n, proj, args.res, r, args.seed, method)?
+            let spec = of_sampler(sampler.as_ref(), n, proj, args.res, r, args.seed, method)?;
+            let what = format!("{} in {}, seed {}", sampler.name(), proj.name(), args.seed);
+            (spec, what)
         }
         (None, Some(path)) => {
             let sets = read_points(path)?;
@@ -186,7 +188,8 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
             if let Some(note) = long_exact_note(sets.n(), args.res, sets.sets(), method) {
                 eprintln!("{note}");
             }
-            of_sets(&sets, proj, args.res, method)?
+            let what = format!("{} in {}", path.display(), proj.name());
+            (of_sets(&sets, proj, args.res, method)?, what)
         }
         (None, None) => unreachable!("clap requires --sampler or --input"),
     };
@@ -196,7 +199,7 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
         .map(|path| (path, radial_profile(&spec, args.cones, method)));
     crate::output::write_group(&outputs, |staged| {
         let images: Vec<PathBuf> = args.output.iter().map(|p| staged(p)).collect();
-        write_spectrum(&spec, &images, &kinds)?;
+        write_spectrum(&spec, &what, &images, &kinds)?;
         if let Some(path) = &args.stderr {
             write_npy(&staged(path), &[spec.res, spec.res], &spec.stderr)?;
         }
@@ -269,14 +272,22 @@ fn no_stderr(why: &str, fix: &str) -> Error {
 /// Writes the mean spectrum to every output in its format.
 pub fn write_spectrum(
     spec: &ExpectedSpectrum,
+    what: &str,
     outputs: &[PathBuf],
     kinds: &[ImageKind],
 ) -> Result<()> {
+    // The PNG's description names what it shows: `what` (the sampler or file, the projection), N
+    // and R.
+    // (ASCII: a PNG text chunk holds Latin-1, so a file name's other characters become '?'.)
+    let identity: String = format!("{what}, N = {}, {} realizations", spec.n, spec.realizations)
+        .chars()
+        .map(|c| if c.is_ascii() { c } else { '?' })
+        .collect();
     for (path, kind) in outputs.iter().zip(kinds) {
         match kind {
             ImageKind::Npy => write_npy(path, &[spec.res, spec.res], &spec.mean)?,
             ImageKind::Exr => write_spectrum_exr(path, &spec.mean, spec.res)?,
-            ImageKind::Png => write_spectrum_png(path, &spec.mean, spec.res)?,
+            ImageKind::Png => write_spectrum_png(path, &spec.mean, spec.res, &identity)?,
         }
     }
     Ok(())

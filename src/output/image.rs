@@ -141,8 +141,9 @@ pub fn spectrum_png_key() -> String {
 
 /// Writes a spectrum as PNG (log tone map, largest `k2` on top), scaled up by the smallest integer
 /// factor that makes it at least [`SPECTRUM_PNG_MIN_SIDE`] pixels (`--res 100`: 300 pixels), with
-/// [`spectrum_png_key`] and `K` stored in the file as its description.
-pub fn write_spectrum_png(path: &Path, values: &[f64], res: usize) -> Result<()> {
+/// `identity` (what the spectrum is of, ASCII), `K` and [`spectrum_png_key`] stored in the file as its
+/// description.
+pub fn write_spectrum_png(path: &Path, values: &[f64], res: usize, identity: &str) -> Result<()> {
     let grey: Vec<u8> = spectrum_image_rows(values, res)
         .into_iter()
         .map(tone_map_log)
@@ -150,7 +151,7 @@ pub fn write_spectrum_png(path: &Path, values: &[f64], res: usize) -> Result<()>
     let (side, pixels) = upscaled(&grey, res, SPECTRUM_PNG_MIN_SIDE);
     let scale = side / res;
     let key = format!(
-        "Power spectrum, K = {res} frequencies per side, {scale} x {scale} pixels each: {}",
+        "Power spectrum of {identity}, K = {res} frequencies per side, {scale} x {scale} pixels each: {}",
         spectrum_png_key()
     );
     write_png_described(path, [side, side], 1, &pixels, Some(key))
@@ -184,7 +185,7 @@ mod tests {
     fn a_spectrum_png_says_how_it_reads() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("p.png");
-        write_spectrum_png(&path, &[1.0; 16], 4).unwrap();
+        write_spectrum_png(&path, &[1.0; 16], 4, "a test").unwrap();
         let file = std::io::BufReader::new(std::fs::File::open(&path).unwrap());
         let reader = png::Decoder::new(file).read_info().unwrap();
         let info = reader.info();
@@ -194,7 +195,7 @@ mod tests {
         assert_eq!(text[0].keyword, "Description");
         assert!(text[0]
             .text
-            .starts_with("Power spectrum, K = 4 frequencies per side, 64 x 64"));
+            .starts_with("Power spectrum of a test, K = 4 frequencies per side, 64 x 64"));
         assert!(text[0].text.ends_with(&spectrum_png_key()));
     }
 }

@@ -128,10 +128,9 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
                 dir.join(format!("{stem}.png")),
                 dir.join(format!("{stem}.npy")),
             ];
-            let what = format!("{} in {}, seed {}", sampler.name(), proj.name(), args.seed);
             super::spectrum::write_spectrum(
                 &spec,
-                &what,
+                &super::spectrum::sampler_identity(sampler.as_ref(), proj, args.seed),
                 &outputs,
                 &[ImageKind::Png, ImageKind::Npy],
             )?;

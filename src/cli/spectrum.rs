@@ -148,8 +148,7 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
                 eprintln!("{note}");
             }
             let spec = of_sampler(sampler.as_ref(), n, proj, args.res, r, args.seed, method)?;
-            let what = format!("{} in {}, seed {}", sampler.name(), proj.name(), args.seed);
-            (spec, what)
+            (spec, sampler_identity(sampler.as_ref(), proj, args.seed))
         }
         (None, Some(path)) => {
             let sets = read_points(path)?;
@@ -269,6 +268,12 @@ fn no_stderr(why: &str, fix: &str) -> Error {
     ))
 }
 
+/// What a sampler's spectrum is of, as its PNG names it: `SAMPLER in PROJ, seed S` (the sampler's
+/// name includes its shear).
+pub fn sampler_identity(sampler: &dyn samplers::Sampler, proj: Projection, seed: u64) -> String {
+    format!("{} in {}, seed {seed}", sampler.name(), proj.name())
+}
+
 /// Writes the mean spectrum to every output in its format.
 pub fn write_spectrum(
     spec: &ExpectedSpectrum,
@@ -278,11 +283,7 @@ pub fn write_spectrum(
 ) -> Result<()> {
     // The PNG's description names what it shows: `what` (the sampler or file, the projection), N
     // and R.
-    // (ASCII: a PNG text chunk holds Latin-1, so a file name's other characters become '?'.)
-    let identity: String = format!("{what}, N = {}, {} realizations", spec.n, spec.realizations)
-        .chars()
-        .map(|c| if c.is_ascii() { c } else { '?' })
-        .collect();
+    let identity = format!("{what}, N = {}, {} realizations", spec.n, spec.realizations);
     for (path, kind) in outputs.iter().zip(kinds) {
         match kind {
             ImageKind::Npy => write_npy(path, &[spec.res, spec.res], &spec.mean)?,

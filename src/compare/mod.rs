@@ -176,6 +176,9 @@ pub struct Robustness {
     pub sampler: String,
     /// Relative error put on the shear (0 = exact oracle).
     pub error: f64,
+    /// Whether the oracle's shear moves the sampler on this subject: false for a shape table kept
+    /// unsheared (see `tables::moved`), whose rows are one measurement repeated.
+    pub moved: bool,
     /// The measurement.
     pub point: ConvergePoint,
 }
@@ -395,7 +398,7 @@ fn robustness(
             // are the same bits as measuring each; 20 of 21 ray-traced studies saved per table).
             let unmoved = match spec {
                 SamplerSpec::Table(target) => !tables::moved(
-                    &tables::table_frame(crate::targets::Target::load(target)?, s.shear_range),
+                    &tables::framed_target(target, s.shear_range)?,
                     s.shear_range,
                 ),
                 _ => false,
@@ -418,6 +421,7 @@ fn robustness(
                     subject: s.label.clone(),
                     sampler: spec.label(),
                     error: e,
+                    moved: !unmoved,
                     point,
                 });
             }

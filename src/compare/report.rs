@@ -2,7 +2,7 @@
 //! spectra gallery per sampler, and CSV / npy of every number.
 
 use super::config::{CompareConfig, GALLERY_SHEAR_RANGE};
-use super::tables::{moved, start_sampler, table_frame, TableCache, TABLE_ITERATIONS};
+use super::tables::{framed_target, moved, start_sampler, TableCache, TABLE_ITERATIONS};
 use super::{instantiate, usable_n, Outcome, Robustness, SamplerSpec, Study, SubjectInfo};
 use crate::converge::{plot, Convergence};
 use crate::error::Result;
@@ -189,15 +189,16 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
     write_atomic(&out.join("robustness.csv"), |w| {
         writeln!(
             w,
-            "subject,sampler,shear_error,n,realizations,mse,mse_stderr"
+            "subject,sampler,shear_error,moved_by_oracle,n,realizations,mse,mse_stderr"
         )?;
         for row in &outcome.robustness {
             writeln!(
                 w,
-                "\"{}\",\"{}\",{},{},{r},{},{}",
+                "\"{}\",\"{}\",{},{},{},{r},{},{}",
                 row.subject,
                 row.sampler,
                 row.error,
+                row.moved,
                 row.point.n,
                 row.point.mse,
                 row.point.mse_stderr
@@ -422,7 +423,7 @@ fn write_gallery(
         let shear_note = match spec {
             SamplerSpec::Classical(_) => String::new(),
             SamplerSpec::Table(target) => {
-                let framed = Target::load(target).map(|t| table_frame(t, GALLERY_SHEAR_RANGE));
+                let framed = framed_target(target, GALLERY_SHEAR_RANGE);
                 format!(
                     " (designed for {}), sheared by 0.5 (seam-free)",
                     design_text(&framed)
@@ -461,7 +462,7 @@ fn write_gallery(
     Ok(written)
 }
 
-/// What a table's target, framed for an integrand's shear range ([`table_frame`]), is designed for, in
+/// What a table's target, framed for an integrand's shear range ([`framed_target`]), is designed for, in
 /// words (the Tables section and the spectra gallery's titles).
 fn design_text(framed: &Result<Target>) -> String {
     match framed {
@@ -1006,12 +1007,9 @@ fn write_robustness_plot(path: &Path, outcome: &Outcome, label: &str) -> Result<
         for r in &rows {
             span = (span.0.min(r.error), span.1.max(r.error));
         }
-        // A sampler whose estimates do not change with the error is not moved by the oracle here
-        // (a table kept unsheared on this integrand): its flat line is not robustness.
-        let unmoved = rows.len() > 1
-            && rows
-                .iter()
-                .all(|r| r.point.mse.to_bits() == rows[0].point.mse.to_bits());
+        // A sampler the oracle does not move here (a table kept unsheared on this integrand) draws
+        // a flat line that is not robustness.
+        let unmoved = rows.first().is_some_and(|r| !r.moved);
         series.push(Series {
             label: if unmoved {
                 format!("{sampler} (not moved by the oracle here)")
@@ -1111,7 +1109,7 @@ fn write_tables(
                 continue;
             };
             let range = subject.shear_range;
-            let framed = Target::load(target).map(|t| table_frame(t, range));
+            let framed = framed_target(target, range);
             let design = design_text(&framed);
             // The start at each N, named once when it does not change with N.
             let starts: Vec<(usize, &str)> = c.ns.iter().map(|&n| (n, start_sampler(n))).collect();

@@ -63,6 +63,13 @@ pub fn moved(target: &Target, range: (f64, f64)) -> bool {
     matches!(target, Target::Variance(_)) || frame_shear(range) != 0.0
 }
 
+/// The target in the file `target` (or built in: see [`Target::load`]) moved into the frame of
+/// [`frame_shear`] for a subject whose shears span `range` (see [`table_frame`]): what a table of it
+/// is designed for.
+pub fn framed_target(target: &Path, range: (f64, f64)) -> Result<Target> {
+    Ok(table_frame(Target::load(target)?, range))
+}
+
 /// The target moved into the frame of [`frame_shear`] for a subject whose shears span `range`: a
 /// hairline becomes unsheared, a double wedge spans `range` minus the frame shear (at least
 /// [`MIN_WEDGE_HALF_WIDTH`] either side of its middle).
@@ -151,7 +158,7 @@ impl TableCache {
         range: (f64, f64),
         n: usize,
     ) -> Result<(Box<dyn Sampler>, f64)> {
-        let framed = within_reach(table_frame(Target::load(target)?, range), n)?;
+        let framed = within_reach(framed_target(target, range)?, n)?;
         let (table, seconds) = self.table(target, &framed, n)?;
         let shear = if moved(&framed, range) {
             shear

@@ -76,8 +76,9 @@ pub fn write_png(
     write_png_described(path, [width, height], channels, pixels, None)
 }
 
-/// [`write_png`] with an ASCII `description` stored in the file (a `tEXt` chunk, keyword
-/// `Description`, which image viewers show among the file's properties).
+/// [`write_png`] with a `description` stored in the file (a `tEXt` chunk, keyword `Description`,
+/// which image viewers show among the file's properties). A text chunk holds Latin-1, so every
+/// character outside ASCII (e.g. of a file name) is stored as `?`.
 pub fn write_png_described(
     path: &Path,
     [width, height]: [usize; 2],
@@ -94,8 +95,12 @@ pub fn write_png_described(
         let mut enc = png::Encoder::new(w, width as u32, height as u32);
         enc.set_color(colour);
         enc.set_depth(png::BitDepth::Eight);
-        if let Some(text) = description {
-            enc.add_text_chunk("Description".into(), text)
+        if let Some(text) = &description {
+            let ascii = text
+                .chars()
+                .map(|c| if c.is_ascii() { c } else { '?' })
+                .collect();
+            enc.add_text_chunk("Description".into(), ascii)
                 .map_err(std::io::Error::other)?;
         }
         let mut writer = enc.write_header().map_err(std::io::Error::other)?;
@@ -141,7 +146,7 @@ pub fn spectrum_png_key() -> String {
 
 /// Writes a spectrum as PNG (log tone map, largest `k2` on top), scaled up by the smallest integer
 /// factor that makes it at least [`SPECTRUM_PNG_MIN_SIDE`] pixels (`--res 100`: 300 pixels), with
-/// `identity` (what the spectrum is of, ASCII), `K` and [`spectrum_png_key`] stored in the file as its
+/// `identity` (what the spectrum is of), `K` and [`spectrum_png_key`] stored in the file as its
 /// description.
 pub fn write_spectrum_png(path: &Path, values: &[f64], res: usize, identity: &str) -> Result<()> {
     let grey: Vec<u8> = spectrum_image_rows(values, res)
@@ -185,7 +190,8 @@ mod tests {
     fn a_spectrum_png_says_how_it_reads() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("p.png");
-        write_spectrum_png(&path, &[1.0; 16], 4, "a test").unwrap();
+        // A PNG text chunk is Latin-1: characters outside ASCII are stored as '?'.
+        write_spectrum_png(&path, &[1.0; 16], 4, "sätze.npy in xu").unwrap();
         let file = std::io::BufReader::new(std::fs::File::open(&path).unwrap());
         let reader = png::Decoder::new(file).read_info().unwrap();
         let info = reader.info();
@@ -195,7 +201,7 @@ mod tests {
         assert_eq!(text[0].keyword, "Description");
         assert!(text[0]
             .text
-            .starts_with("Power spectrum of a test, K = 4 frequencies per side, 64 x 64"));
+            .starts_with("Power spectrum of s?tze.npy in xu, K = 4 frequencies per side, 64 x 64"));
         assert!(text[0].text.ends_with(&spectrum_png_key()));
     }
 }

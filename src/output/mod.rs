@@ -791,8 +791,15 @@ fn os_error(e: &std::io::Error) -> std::io::Error {
 }
 
 /// Refuses a folder `dir` (given by `flag`, holding the `what`) that is, or lies under, an existing
-/// file, before any work: the run could not write to it.
+/// file, before any work: the run could not write to it. The message's fix is to give `flag` a
+/// folder path.
 pub fn check_folder(dir: &Path, flag: &str, what: &str) -> Result<()> {
+    check_folder_fixed_by(dir, flag, what, &format!("give {flag} a folder path"))
+}
+
+/// [`check_folder`] for a folder chosen by something other than a flag (`name`, e.g. "the cache
+/// folder"), with the message's `fix` given by the caller.
+pub fn check_folder_fixed_by(dir: &Path, name: &str, what: &str, fix: &str) -> Result<()> {
     match file_in_the_way(dir) {
         Some(file) => {
             let place = if file == dir {
@@ -806,7 +813,7 @@ pub fn check_folder(dir: &Path, flag: &str, what: &str) -> Result<()> {
                 )
             };
             Err(Error::Usage(format!(
-                "{flag} {place}, not a folder, so no {what} folder can be written there; give {flag} a folder path"
+                "{name} {place}, not a folder, so no {what} folder can be written there; {fix}"
             )))
         }
         None => Ok(()),

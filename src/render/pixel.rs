@@ -38,18 +38,16 @@ pub fn default_cache_dir() -> PathBuf {
 /// reference's work, as render and compare refuse their `--cache`.
 pub fn check_reference_cache() -> Result<()> {
     let (dir, source) = cache_dir_and_source(None);
-    let flag = if source == "--cache" {
-        "the cache folder"
-    } else {
-        source
-    };
-    crate::output::check_folder(&dir, flag, "cache").map_err(|e| match e {
-        Error::Usage(m) if source == "--cache" => Error::Usage(m.replace(
-            &format!("give {flag} a folder path"),
+    if source == "--cache" {
+        crate::output::check_folder_fixed_by(
+            &dir,
+            "the cache folder",
+            "cache",
             "set $ANISOSPEC_CACHE to a folder path, or move the file",
-        )),
-        other => other,
-    })
+        )
+    } else {
+        crate::output::check_folder(&dir, source, "cache")
+    }
 }
 
 /// The cache folder a command uses, and where that choice came from, to name in a message about

@@ -1702,14 +1702,15 @@ fn spectrum_stderr_needs_two_realizations() {
 fn output_names_must_match_what_is_written() {
     let dir = tempfile::tempdir().unwrap();
     let at = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
-    let (png, txt, npy, csv) = (at("o.png"), at("p.txt"), at("r.npy"), at("c.txt"));
+    let (csv_o, txt, npy, csv) = (at("o.csv"), at("p.txt"), at("r.npy"), at("c.txt"));
     let cases: Vec<(Vec<&str>, String, String)> = vec![
         (
-            vec!["oracle", "-o", &png],
+            vec!["oracle", "-o", &csv_o],
             format!(
-                "the outputs are {} and {}, not a .png",
+                "the outputs are {}, {} and {}, not a .csv",
                 at("o.exr"),
-                at("o.npy")
+                at("o.npy"),
+                at("o.png")
             ),
             at("o.exr"),
         ),
@@ -1762,11 +1763,15 @@ fn output_names_must_match_what_is_written() {
     for (args, needle, file) in &cases {
         rejects(args, needle, Path::new(file));
     }
-    // Without an extension, or with one of its own, the oracle writes both files.
-    for (given, stem) in [("plain", "plain"), ("named.npy", "named")] {
+    // Without an extension, or with one of its own, the oracle writes all three files.
+    for (given, stem) in [
+        ("plain", "plain"),
+        ("named.npy", "named"),
+        ("seen.png", "seen"),
+    ] {
         let o = anisospec(&["oracle", "-o", &at(given)]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        for ext in ["exr", "npy"] {
+        for ext in ["exr", "npy", "png"] {
             assert!(
                 dir.path().join(format!("{stem}.{ext}")).exists(),
                 "{stem}.{ext}"
@@ -2066,7 +2071,7 @@ fn outputs_keep_the_case_of_their_extension() {
             vec!["sample", "--sampler", "mj", "-n", "16"],
             vec!["T.NPY"],
         ),
-        ("oracle", vec!["oracle"], vec!["T.NPY", "T.exr"]),
+        ("oracle", vec!["oracle"], vec!["T.NPY", "T.exr", "T.png"]),
     ];
     for (sub, mut args, written) in cases {
         std::fs::create_dir(dir.path().join(sub)).unwrap();

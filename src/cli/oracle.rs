@@ -1,31 +1,41 @@
 //! `anisospec oracle`: the per-pixel depth, shear, shear range and class of the scene (DESIGN §5).
 
 use crate::error::Result;
+use crate::output::oracle_map::{write_oracle_png, OracleMaps};
 use crate::render::oracle::{oracle_array, oracle_image, PixelClass, ORACLE_CHANNELS};
 use crate::render::Scene;
+
+/// The classes in class order (their numbers in the EXR and npy, their colours in the PNG).
+const CLASSES: [PixelClass; 3] = [
+    PixelClass::InFocus,
+    PixelClass::Hairline,
+    PixelClass::DoubleWedge,
+];
 use std::path::PathBuf;
 
-/// Writes the depth oracle of the scene as EXR and npy.
+/// Writes the depth oracle of the scene as EXR, npy and a PNG picture.
 #[derive(clap::Args, Debug)]
 pub struct OracleArgs {
     /// TOML scene file overriding the built-in camera (width, height, fov, position, focus, aperture);
     /// without it the built-in 64x64 Cornell box is used.
     #[arg(long)]
     pub scene: Option<PathBuf>,
-    /// Output path; FILE.exr (channels depth, sx, sy, s_min, s_max, class) and FILE.npy (float64
-    /// [height, width, 6], same channel order, row 0 at the top of the image) are written: name it
-    /// FILE.exr, FILE.npy or FILE. Depth is in world units along the view axis; shears are in pixels per lens
-    /// width (the integrand varies along x + s*u); class is 0 in focus, 1 hairline, 2 double wedge.
+    /// Output path; FILE.exr (channels depth, sx, sy, s_min, s_max, class), FILE.npy (float64
+    /// [height, width, 6], same channel order, row 0 at the top of the image) and FILE.png (the
+    /// class map beside the shear map, with legend and colour bar) are written: name it FILE.exr,
+    /// FILE.npy, FILE.png or FILE. Depth is in world units along the view axis; shears are in pixels
+    /// per lens width (the integrand varies along x + s*u); class is 0 in focus, 1 hairline, 2 double
+    /// wedge.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
 }
 
 /// Runs `anisospec oracle`.
 pub fn run(args: &OracleArgs) -> Result<()> {
-    let files = crate::cli::sibling_outputs(&args.output, &["exr", "npy"])?;
-    let (exr, npy) = (&files[0], &files[1]);
+    let files = crate::cli::sibling_outputs(&args.output, &["exr", "npy", "png"])?;
+    let (exr, npy, png) = (&files[0], &files[1], &files[2]);
     let inputs: Vec<std::path::PathBuf> = args.scene.iter().cloned().collect();
-    crate::output::check_outputs(&[exr, npy], &inputs)?;
+    crate::output::check_outputs(&[exr, npy, png], &inputs)?;
     let scene = Scene::load(args.scene.as_deref())?;
     let (w, h) = (scene.width(), scene.height());
     let oracle = oracle_image(&scene, &crate::progress::bar(h as u64, "oracle rows"))?;
@@ -43,18 +53,33 @@ pub fn run(args: &OracleArgs) -> Result<()> {
             (*name, plane)
         })
         .collect();
-    crate::output::write_group(&[npy, exr], |staged| {
+    let classes: Vec<usize> = oracle.iter().map(|o| o.class as usize).collect();
+    let shear: Vec<f64> = oracle.iter().map(|o| o.sx).collect();
+    let class_names = CLASSES.map(PixelClass::name);
+    let maps = OracleMaps {
+        size: [w, h],
+        classes: &classes,
+        class_names: &class_names,
+        shear: &shear,
+    };
+    crate::output::write_group(&[npy, exr, png], |staged| {
         crate::output::write_npy(&staged(npy), &[h, w, ORACLE_CHANNELS.len()], &data)?;
-        crate::output::image::write_exr(&staged(exr), w, h, &channels)
+        crate::output::image::write_exr(&staged(exr), w, h, &channels)?;
+        write_oracle_png(
+            &staged(png),
+            &format!("Depth oracle, {w} x {h} pixels: class and shear per pixel"),
+            &maps,
+        )
     })?;
     let count = |c: PixelClass| oracle.iter().filter(|o| o.class == c).count();
     outln!(
-        "oracle of {w}x{h} pixels: {} in focus, {} hairline, {} double wedge; wrote {} and {}",
+        "oracle of {w}x{h} pixels: {} in focus, {} hairline, {} double wedge; wrote {}, {} and {}",
         count(PixelClass::InFocus),
         count(PixelClass::Hairline),
         count(PixelClass::DoubleWedge),
         exr.display(),
-        npy.display()
+        npy.display(),
+        png.display()
     );
     Ok(())
 }

@@ -5,6 +5,7 @@
 
 pub mod image;
 pub mod interrupt;
+pub mod oracle_map;
 pub mod plot;
 pub mod sheet;
 

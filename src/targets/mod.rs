@@ -876,13 +876,21 @@ fn image_value(img: &Image, nu1: f64, nu2: f64) -> f64 {
         return 1.0;
     }
     let e = img.extent;
-    let fj = (nu1 + e) / (2.0 * e) * cols as f64;
-    let fi = (nu2 + e) / (2.0 * e) * rows as f64;
+    // A frequency on a pixel's left edge (a spectrum of K bins written with extent K/(2 sqrt N) puts
+    // every k there) may be computed a rounding below it: positions within PIXEL_EDGE of an edge
+    // count as on it, so each k reads its own pixel, not its left neighbour.
+    let fj = ((nu1 + e) / (2.0 * e) * cols as f64 + PIXEL_EDGE).floor();
+    let fi = ((nu2 + e) / (2.0 * e) * rows as f64 + PIXEL_EDGE).floor();
     if fj < 0.0 || fi < 0.0 || fj >= cols as f64 || fi >= rows as f64 {
         return 1.0;
     }
     img.pixels[fi as usize * cols + fj as usize]
 }
+
+/// How close (in pixels) a frequency must be to a pixel's left or lower edge to count as on it: far
+/// above the rounding of `(ν + extent) / (2 extent) · cols` (about 1e-13 for 10^4 pixels), far below
+/// any real offset of a frequency inside a pixel.
+const PIXEL_EDGE: f64 = 1e-9;
 
 /// Reads a target image: a 2D npy array (`float64` or `float32`, row 0 at the lowest `ν2`) or an EXR
 /// image (channel `Y`, else `R`, else its only one, several others being refused; top row at the
@@ -1137,6 +1145,29 @@ mod tests {
             pixels,
             shape: [m, m],
         })
+    }
+
+    /// A spectrum of K bins used as a target with extent K/(2 sqrt N) gives every frequency its own
+    /// bin, whatever N (before, at N = 576 and K = 96, k1 = −17 read the pixel of −18: the position
+    /// (ν + e)/(2e)·K fell a rounding below the integer).
+    #[test]
+    fn a_measured_spectrum_as_target_gives_each_frequency_its_own_bin() {
+        for (n, k) in [(576usize, 96usize), (1024, 128), (300, 64), (4096, 256), (2000, 90)] {
+            let sqrt_n = (n as f64).sqrt();
+            let Target::Image(mut img) = measured_image(Vec::new(), k) else {
+                unreachable!()
+            };
+            img.extent = k as f64 / (2.0 * sqrt_n);
+            img.pixels = (0..k * k).map(|p| p as f64).collect();
+            let half = (k / 2) as i64;
+            for k2 in -half..half {
+                for k1 in -half..half {
+                    let v = image_value(&img, k1 as f64 / sqrt_n, k2 as f64 / sqrt_n);
+                    let want = ((k2 + half) * k as i64 + k1 + half) as f64;
+                    assert_eq!(v, want, "N={n} K={k} k=({k1}, {k2})");
+                }
+            }
+        }
     }
 
     /// An image dark on its whole disc (956 cells at N = 256, extent 1) is beyond N's reach, unless

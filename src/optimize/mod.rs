@@ -259,7 +259,7 @@ pub struct SetReport {
 }
 
 /// Moves apart points that coincide (within `1e-9 / sqrt(N)`) with a lower-numbered point in any
-/// constrained projection, by a uniform step of up to `1e-3 / sqrt(N)` per coordinate. Returns how many
+/// constrained projection, by a uniform step in `±0.5e-3 / sqrt(N)` per coordinate. Returns how many
 /// moved.
 fn separate_duplicates(objective: &Objective, set: &mut [f64], rng: &mut Rng) -> usize {
     let dims = objective.dims;

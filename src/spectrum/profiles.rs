@@ -39,6 +39,21 @@ pub fn check_cones(cones: usize) -> Result<()> {
 /// for an even count, cone `cones / 2` holds the `k2` axis. Cones are half-open, `[c − ½, c + ½)` in
 /// units of `π / cones`: a frequency on an edge goes to the cone above it. `k = 0` is put in cone 0.
 pub fn cone_index(k1: i64, k2: i64, cones: usize) -> usize {
+    // An integer frequency can lie on an edge only along an axis or a diagonal (the only directions
+    // q π/4 whose tangent is rational, Niven's theorem), where rounding may put θ / width a hair
+    // below the edge (the k2 axis with 25 cones went to cone 12): their cone is found in integers,
+    // floor(q cones / 4 + 1/2) = (q cones + 2) / 4.
+    let quarter = match (k1, k2) {
+        (0, 0) => return 0,
+        (_, 0) => Some(0),
+        (0, _) => Some(2),
+        _ if k1 == k2 => Some(1),
+        _ if k1 == -k2 => Some(3),
+        _ => None,
+    };
+    if let Some(q) = quarter {
+        return (q * cones + 2) / 4 % cones;
+    }
     let theta = (k2 as f64).atan2(k1 as f64).rem_euclid(PI);
     let width = PI / cones as f64;
     ((theta / width + 0.5).floor() as usize) % cones
@@ -230,6 +245,36 @@ mod tests {
         assert_eq!(cone_index(3, 3, 4), 1);
         assert_eq!(cone_index(-3, 3, 4), 3);
         assert_eq!(cone_index(3, -3, 4), 3);
+    }
+
+    /// The axes and diagonals, the directions that can lie on a cone's edge, go to the cone whose
+    /// half-open range `[c − ½, c + ½)` (units of π / cones) holds them, in exact arithmetic, for
+    /// every cone count: θ = q π/4 is in cone c when 4c − 2 <= q cones < 4c + 2 (mod 4 cones). The
+    /// float formula put the k2 axis into the cone below its edge for 18 counts from 1 to 360 (25,
+    /// 41, 42, 50, ...). Off those directions the float formula holds: its cone holds θ.
+    #[test]
+    fn frequencies_on_a_cone_edge_go_to_the_cone_above() {
+        for cones in 1..=MAX_CONES {
+            for (q, k) in [(0, (7, 0)), (1, (4, 4)), (2, (0, -9)), (3, (-2, 2))] {
+                let c = cone_index(k.0, k.1, cones);
+                let (lo, hi) = (4 * c as i64 - 2, 4 * c as i64 + 2);
+                let at = (q * cones) as i64;
+                let wrapped = lo + (at - lo).rem_euclid(4 * cones as i64);
+                assert!(
+                    (lo..hi).contains(&wrapped) && c < cones,
+                    "cones={cones} q={q}: cone {c}"
+                );
+            }
+            for (k1, k2) in [(3, 1), (-5, 2), (1, -7), (12, 5)] {
+                let theta = (k2 as f64).atan2(k1 as f64).rem_euclid(PI) / PI * cones as f64;
+                let c = cone_index(k1, k2, cones) as f64;
+                let theta = c - 0.5 + (theta - (c - 0.5)).rem_euclid(cones as f64);
+                assert!(
+                    c - 0.5 <= theta && theta < c + 0.5,
+                    "cones={cones} k=({k1}, {k2})"
+                );
+            }
+        }
     }
 
     /// A 16 × 16 lattice's spectrum is 0 (within the method's error) off its dual lattice, which

@@ -542,18 +542,20 @@ impl Target {
     }
 
     /// The area of the dark region in normalized frequency, i.e. its expected number of frequency
-    /// cells in units of `N` (an upper bound where parts overlap).
+    /// cells in units of `N` (an upper bound where parts overlap). A band lies within the disc of
+    /// its length (a wedge within its radius), so its area is at most that disc's: a wide opening or
+    /// margin darkens no more than the whole disc.
     fn dark_area(&self) -> f64 {
         use std::f64::consts::PI;
         match self {
             Target::Hairline(h) => {
-                4.0 * h.half_width * h.length
-                    + 2.0 * h.opening * h.length.powi(2)
+                (4.0 * h.half_width * h.length + 2.0 * h.opening * h.length.powi(2))
+                    .min(PI * h.length.powi(2))
                     + PI * h.inner_radius.powi(2)
             }
             Target::DoubleWedge(d) => {
-                (d.s1.atan() - d.s0.atan()) * d.radius.powi(2)
-                    + 4.0 * d.margin * d.radius
+                ((d.s1.atan() - d.s0.atan()) * d.radius.powi(2) + 4.0 * d.margin * d.radius)
+                    .min(PI * d.radius.powi(2))
                     + PI * d.inner_radius.powi(2)
             }
             Target::BlueNoise(b) => PI * b.radius.powi(2),
@@ -612,7 +614,7 @@ impl Target {
         let estimate = self.dark_area() * n as f64;
         let peaks = self.peak_area(n) * n as f64;
         if estimate > 4.0 * (REACH * n as f64 + peaks) {
-            return Err(self.beyond_reach(n, estimate, peaks));
+            return Err(self.beyond_reach(n, Cells::Estimated(estimate), peaks));
         }
         let sqrt_n = (n as f64).sqrt();
         let largest = (crate::spectrum::MAX_RES / 2 - 1) as f64;
@@ -658,7 +660,7 @@ impl Target {
             n,
         );
         if dark_cells as f64 > REACH * n as f64 + surplus {
-            return Err(self.beyond_reach(n, dark_cells as f64, surplus));
+            return Err(self.beyond_reach(n, Cells::Counted(dark_cells), surplus));
         }
         // The rim: non-dark cells next to a dark one (8-neighbourhood), where the energy pushed out of
         // the dark region piles up first. They get the dark cells' weight.
@@ -780,7 +782,11 @@ impl Target {
         ))
     }
 
-    fn beyond_reach(&self, n: usize, dark_cells: f64, surplus: f64) -> Error {
+    fn beyond_reach(&self, n: usize, cells: Cells, surplus: f64) -> Error {
+        let (dark_cells, about) = match cells {
+            Cells::Estimated(c) => (c, "about "),
+            Cells::Counted(c) => (c as f64, ""),
+        };
         let reach = REACH * n as f64 + surplus;
         let paid = if surplus > 0.0 {
             format!(
@@ -807,7 +813,7 @@ impl Target {
             Target::Variance(_) => unreachable!("a variance target has no dark region"),
         };
         Error::Input(format!(
-            "the {} target darkens {} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}{paid}: reachable fraction {}. Shrink its dark region by that factor in area: {fix}",
+            "the {} target darkens {about}{} frequency cells at N = {n}, but {n} points can darken only about {reach:.0}{paid}: reachable fraction {}. Shrink its dark region by that factor in area: {fix}",
             self.kind(),
             number(dark_cells.round()),
             crate::output::plot::short_number(reach / dark_cells)
@@ -860,6 +866,13 @@ const BUILT_IN: [(&str, &str); 8] = [
         include_str!("../../targets/widened-hairline.toml"),
     ),
 ];
+
+/// How many frequency cells a target darkens: estimated from its shape's area (before a grid is laid
+/// out) or counted on the grid.
+enum Cells {
+    Estimated(f64),
+    Counted(usize),
+}
 
 /// The built-in text of the shipped target at `path` (written as in [`BUILT_IN`], `./` allowed).
 fn built_in(path: &Path) -> Option<&'static str> {
@@ -1130,6 +1143,17 @@ mod tests {
                 PI * r * r
             );
         }
+        // A band or wedge wider than its disc darkens that disc, no more: reachable where the
+        // disc is (before, an opening of 10 was estimated at 1280 cells and refused at N = 256).
+        // They hold the blue-noise disc's cells and the 4 at |k| = 8 (r <= length against r < radius).
+        for wide in [
+            "kind = \"hairline\"\nshear = 0\nhalf_width = 0\nopening = 10\nlength = 0.5\n",
+            "kind = \"double-wedge\"\ns0 = -0.2\ns1 = 0.2\nmargin = 10\nradius = 0.5\n",
+        ] {
+            let g = Target::parse(wide).unwrap().grid(256).unwrap();
+            let disc = t.grid(256).unwrap();
+            assert_eq!(g.dark_cells, disc.dark_cells + 4, "{wide}");
+        }
         let too_dark = Target::parse("kind = \"blue-noise\"\nradius = 2\n").unwrap();
         let e = too_dark.grid(256).unwrap_err().to_string();
         assert!(e.contains("reachable fraction"), "{e}");
@@ -1152,7 +1176,13 @@ mod tests {
     /// (ν + e)/(2e)·K fell a rounding below the integer).
     #[test]
     fn a_measured_spectrum_as_target_gives_each_frequency_its_own_bin() {
-        for (n, k) in [(576usize, 96usize), (1024, 128), (300, 64), (4096, 256), (2000, 90)] {
+        for (n, k) in [
+            (576usize, 96usize),
+            (1024, 128),
+            (300, 64),
+            (4096, 256),
+            (2000, 90),
+        ] {
             let sqrt_n = (n as f64).sqrt();
             let Target::Image(mut img) = measured_image(Vec::new(), k) else {
                 unreachable!()

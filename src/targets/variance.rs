@@ -349,10 +349,6 @@ mod tests {
         }
     }
 
-    /// Unsheared and unplaced, the sampled spectrum is the fan's exact `|f̂|²` (from its own Fourier
-    /// coefficients) up to aliasing: over `|k1|, |k2| ≤ 8` the worst relative error is below the
-    /// `max |k| / M` of the module doc at `M` = 256 and 1024 (measured 0.35 % and 0.04 %), and falls as
-    /// `M` grows.
     /// A lattice mixture needs a shear and a shear error to design for, and few placements.
     #[test]
     fn a_lattice_mixture_needs_a_shear_error_and_few_placements() {
@@ -374,6 +370,10 @@ mod tests {
         }
     }
 
+    /// Unsheared and unplaced, the sampled spectrum is the fan's exact `|f̂|²` (from its own Fourier
+    /// coefficients) up to aliasing: over `|k1|, |k2| ≤ 8` (where `|f̂|² > 1e-6`) the worst relative
+    /// error is below `8 / M`, the module doc's `max |k| / M` with `|k|` measured along an axis, at
+    /// `M` = 256 and 1024 (measured 0.35 % and 0.04 %), and falls as `M` grows.
     #[test]
     fn sampled_spectrum_matches_exact_coefficients() {
         let spec_text = "fan:s0=0.3,s1=0.7,c=0.7";

@@ -360,8 +360,9 @@ pub fn floor_note(points: &[ConvergePoint], reference_stderr: f64) -> Option<Str
     (!hit.is_empty()).then(|| {
         format!(
             "the reference floor {floor:.2e} is {} % or more of the MSE at N = {}, so those MSE and \
-             the slope through them are flattened by the reference's own error; raise the pixel's \
-             refcount (e.g. refcount=16777216) to lower the floor",
+             the slope through them are flattened by the reference's own error; the floor falls as \
+             1/refcount, so raise the pixel's refcount (at most refcount=16777216) or leave those N \
+             out",
             100.0 * FLOOR_SHARE,
             hit.join(", ")
         )

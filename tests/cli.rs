@@ -2832,23 +2832,25 @@ fn negative_reals_reach_their_flags_check() {
         ];
         rejects(&args, message, &out);
     }
-    // Too wide a repulsion weighs every pair of points (1e9 took 70 times as long): refused.
-    let args = [
-        "optimize",
-        "--target",
-        "targets/blue-noise.toml",
-        "-n",
-        "16",
-        "--repulsion-radius",
-        "1e9",
-        "-o",
-        o,
-    ];
-    rejects(
-        &args,
-        "--repulsion-radius 1000000000: give at most 4 mean",
-        &out,
-    );
+    // A repulsion wider than a hexagonal packing's spacing stacks points into clusters: refused.
+    for (radius, shown) in [("1e9", "1000000000"), ("1.25", "1.25")] {
+        let args = [
+            "optimize",
+            "--target",
+            "targets/blue-noise.toml",
+            "-n",
+            "16",
+            "--repulsion-radius",
+            radius,
+            "-o",
+            o,
+        ];
+        rejects(
+            &args,
+            &format!("--repulsion-radius {shown}: give at most 1.07 mean"),
+            &out,
+        );
+    }
 }
 
 /// A 2D table has no xy and uv strata: `--strat-radius` and `--strat-weight` are refused by name there,
@@ -3701,5 +3703,56 @@ fn a_cache_variable_that_names_a_file_is_refused_by_name() {
         &args,
         "the cache folder out/cache is a file, not a folder, so no cache folder can be written there; set $ANISOSPEC_CACHE to a folder path",
         &csv,
+    );
+}
+
+/// An output path that ends in a folder separator, or is an extension alone, names no file: refused
+/// before any work with exit 2 (before, `y.npy/` passed the checks, the whole job ran, and writing
+/// failed with exit 1).
+#[test]
+fn outputs_that_name_no_file_are_refused_before_the_work() {
+    let (dir, _) = tmp("unused");
+    let at = |name: &str| format!("{}/{name}", dir.path().display());
+    let (slash, csv_slash, bare, spectrum) = (at("y.npy/"), at("r.csv/"), at(".npy"), at("s.npy"));
+    let target = "targets/blue-noise.toml";
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["sample", "--sampler", "sobol", "-n", "64", "-o", &slash],
+            "has no usable file name",
+        ),
+        (
+            vec!["optimize", "--target", target, "-n", "64", "-o", &slash],
+            "has no usable file name",
+        ),
+        (
+            vec!["optimize", "--target", target, "-n", "64", "-o", &bare],
+            "has no usable file name",
+        ),
+        (
+            vec!["spectrum", "--sampler", "sobol", "-n", "64", "-o", &slash],
+            "has no usable file name",
+        ),
+        (
+            vec![
+                "spectrum",
+                "--sampler",
+                "sobol",
+                "-n",
+                "64",
+                "-o",
+                &spectrum,
+                "--radial",
+                &csv_slash,
+            ],
+            "--radial",
+        ),
+    ];
+    for (args, needle) in &cases {
+        rejects(args, needle, &dir.path().join("y.npy"));
+    }
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "nothing written"
     );
 }

@@ -177,6 +177,12 @@ pub fn image_kinds(outputs: &[PathBuf]) -> Result<Vec<ImageKind>> {
 /// Checks that the file `path` given to `flag` is named `.ext`, the one format `flag` writes (`what`,
 /// e.g. "a CSV table").
 pub fn require_extension(path: &Path, flag: &str, ext: &str, what: &str) -> Result<()> {
+    if crate::output::names_no_file(path) {
+        return Err(Error::Usage(format!(
+            "{flag} {} has no usable file name; give a path such as out/name.{ext}",
+            path.display()
+        )));
+    }
     if extension(path).as_deref() == Some(ext) {
         return Ok(());
     }
@@ -193,19 +199,7 @@ pub fn require_extension(path: &Path, flag: &str, ext: &str, what: &str) -> Resu
 /// name (`out/`, a folder; `out/.npy`, an extension alone), or with another extension (which would not
 /// be written), is a usage error naming the files and the fix.
 pub fn sibling_outputs(output: &Path, exts: &[&str]) -> Result<Vec<PathBuf>> {
-    // `out/` and `out/.` name a folder (their file_name would be `out`, written beside it as
-    // `out.npy`), and `out/.npy` only an extension (written as hidden `.npy.npy` files).
-    let text = output.as_os_str().to_string_lossy();
-    let last = text
-        .rsplit(std::path::is_separator)
-        .next()
-        .unwrap_or_default();
-    let bare_extension = last.strip_prefix('.').is_some_and(|rest| {
-        ["npy", "exr", "png", "txt", "csv", "json"]
-            .iter()
-            .any(|e| e.eq_ignore_ascii_case(rest))
-    });
-    if output.file_name().is_none() || matches!(last, "" | "." | "..") || bare_extension {
+    if crate::output::names_no_file(output) {
         return Err(Error::Usage(format!(
             "-o {} has no usable file name; give a path such as out/image.{}",
             output.display(),

@@ -62,7 +62,8 @@ pub struct OptimizeArgs {
     /// region) to the target's mean there; 0 (off) to 1e6.
     #[arg(long, default_value_t = DEFAULT_ANNULAR_WEIGHT, allow_negative_numbers = true)]
     pub annular_weight: f64,
-    /// Loss: repulsion radius in units of the mean spacing 1/sqrt(N), from 0 (off) to 4.
+    /// Loss: repulsion radius in units of the mean spacing 1/sqrt(N), from 0 (off) to 1.07 (the
+    /// spacing of a hexagonal packing; a wider repulsion stacks points into clusters).
     #[arg(long, default_value_t = DEFAULT_REPULSION.radius, allow_negative_numbers = true)]
     pub repulsion_radius: f64,
     /// Loss: weight of the repulsion term; 0 (off) to 1e6.

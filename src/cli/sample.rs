@@ -38,8 +38,8 @@ pub struct SampleArgs {
 
 /// Runs `anisospec sample`.
 pub fn run(args: &SampleArgs) -> Result<()> {
-    Format::of(&args.output)?;
     check_outputs(&[&args.output], &samplers::input_files(&args.sampler))?;
+    Format::of(&args.output)?;
     let sampler = sampler_with_shear(&args.sampler, args.dims, &args.shear)?;
     let sets = generate_sets(sampler.as_ref(), args.n, args.sets, args.seed)?;
     write_points(&args.output, &sets)?;

@@ -102,8 +102,13 @@ pub const MAX_WEIGHT: f64 = 1e6;
 /// unchanged (0.011, 0.005).
 pub const DEFAULT_ANNULAR_WEIGHT: f64 = 100.0;
 
-/// Largest repulsion radius, in mean spacings `1/sqrt(N)`: about 50 neighbours per point.
-pub const MAX_REPULSION_RADIUS: f64 = 4.0;
+/// Largest repulsion radius, in mean spacings `1/sqrt(N)`: just under `sqrt(2/sqrt(3))` = 1.0746, the
+/// spacing of a hexagonal packing, the widest at which N points can all stand a radius apart. Beyond
+/// it the bounded repulsion lowers its energy by stacking points (measured at N = 256, 300
+/// iterations, weight 1e6: nearest neighbours 1.00 spacing on average at radius 1, 0.89 at 1.25 with
+/// some points coincident, 0.19 at 1.5; at N = 1024, radius 2 and weight 0.1, 2 % of the points
+/// within 0.1 spacing of another).
+pub const MAX_REPULSION_RADIUS: f64 = 1.07;
 
 impl Setup {
     /// The objective: the target on `xy` (2D) or on `xu` and `yv` plus the strata on `xy` and `uv`
@@ -125,7 +130,7 @@ impl Setup {
         }
         if self.repulsion.radius > MAX_REPULSION_RADIUS {
             return Err(Error::Usage(format!(
-                "--repulsion-radius {}: give at most {MAX_REPULSION_RADIUS} mean spacings (the repulsion keeps neighbours apart; a wider one weighs every pair of points, and 1e9 took 70 times as long)",
+                "--repulsion-radius {}: give at most {MAX_REPULSION_RADIUS} mean spacings (the repulsion keeps neighbours apart; N points cannot all stand farther apart than about 1.07 spacings, and a wider repulsion stacks them into clusters)",
                 crate::error::number(self.repulsion.radius)
             )));
         }

@@ -708,6 +708,12 @@ const MAX_NAME_BYTES: usize = 255;
 pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<()> {
     let mut probed: Vec<&Path> = Vec::new();
     for (i, out) in outputs.iter().enumerate() {
+        if names_no_file(out) {
+            return Err(Error::Usage(format!(
+                "the output {} has no usable file name (it ends in a folder, or is an extension alone); give a file path such as out/name.npy",
+                out.display()
+            )));
+        }
         if let Some(input) = inputs.iter().find(|input| same_file(out, input)) {
             return Err(Error::Usage(format!(
                 "the output {} is the input file {}; choose another output name",
@@ -789,6 +795,23 @@ fn os_error(e: &std::io::Error) -> std::io::Error {
     let text = e.to_string();
     let text = text.split(" at path ").next().unwrap_or_default();
     std::io::Error::new(e.kind(), text.to_string())
+}
+
+/// Whether `path` names no file it could be written to: a folder (`out/`, `out/.`, `..`, `/`: a
+/// trailing separator would be dropped by the path's file name, and the run would fail only when it
+/// writes) or an extension alone (`out/.npy`, which would become a hidden file).
+pub fn names_no_file(path: &Path) -> bool {
+    let text = path.as_os_str().to_string_lossy();
+    let last = text
+        .rsplit(std::path::is_separator)
+        .next()
+        .unwrap_or_default();
+    let bare_extension = last.strip_prefix('.').is_some_and(|rest| {
+        ["npy", "exr", "png", "txt", "csv", "json"]
+            .iter()
+            .any(|e| e.eq_ignore_ascii_case(rest))
+    });
+    path.file_name().is_none() || matches!(last, "" | "." | "..") || bare_extension
 }
 
 /// Refuses a folder `dir` (given by `flag`, holding the `what`) that is, or lies under, an existing

@@ -256,6 +256,33 @@ impl CompareConfig {
                 number(*e)
             )));
         }
+        // The report gives errors to 0.1 %: one that reads +0% would pass for the exact oracle, and
+        // two that read the same could not be told apart in its tables and plots.
+        let shown = |e: &f64| super::report::error_text(*e);
+        if let Some(e) = self
+            .oracle_errors
+            .iter()
+            .find(|e| (**e * 1000.0).round() == 0.0)
+        {
+            return Err(Error::Usage(format!(
+                "oracle_errors holds {}, which the report (errors to 0.1 %) would show as {}, as the exact oracle; give errors of 0.0005 or more in size",
+                number(*e),
+                shown(e)
+            )));
+        }
+        for (i, a) in self.oracle_errors.iter().enumerate() {
+            if let Some(b) = self.oracle_errors[..i]
+                .iter()
+                .find(|b| shown(b) == shown(a))
+            {
+                return Err(Error::Usage(format!(
+                    "oracle_errors {} and {} both read {} in the report, which gives errors to 0.1 %; give errors at least 0.001 apart",
+                    number(*b),
+                    number(*a),
+                    shown(a)
+                )));
+            }
+        }
         if self.analytic.is_empty() && self.pixel_classes.is_empty() {
             return Err(Error::Usage(
                 "analytic and pixel_classes are both empty, so there is nothing to integrate; add an [[analytic]] entry or a pixel class, e.g. pixel_classes = [\"hairline\"]".into(),
@@ -722,6 +749,14 @@ mod tests {
         );
         let m = refused(|c| c.oracle_errors = vec![1e-300, 1e-300]);
         assert!(m.contains("oracle_errors lists 1e-300 twice"), "{m}");
+        // Errors the report (to 0.1 %) would show as the exact oracle, or as one another.
+        let m = refused(|c| c.oracle_errors = vec![0.1, 1e-300]);
+        assert!(m.contains("holds 1e-300, which the report"), "{m}");
+        assert!(m.contains("show as +0%"), "{m}");
+        let m = refused(|c| c.oracle_errors = vec![0.1001, 0.1002]);
+        assert!(m.contains("0.1001 and 0.1002 both read +10%"), "{m}");
+        let m = refused(|c| c.oracle_errors = vec![-0.0004, 0.25]);
+        assert!(m.contains("show as -0%"), "{m}");
     }
 
     #[test]

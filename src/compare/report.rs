@@ -839,7 +839,7 @@ fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io:
 const TABLED_ERRORS: [f64; 4] = [-0.25, -0.1, 0.1, 0.25];
 
 /// A relative error as a signed percentage with at most one decimal, e.g. `+10%`, `-2.5%`.
-fn error_text(e: f64) -> String {
+pub(super) fn error_text(e: f64) -> String {
     format!("{:+}%", (e * 1000.0).round() / 10.0)
 }
 

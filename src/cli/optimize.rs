@@ -287,6 +287,18 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         other => other,
     };
     let objective = setup.objective().map_err(in_file)?;
+    for term in &objective.terms {
+        if let Some((cells, largest)) = term.grid.above_reach() {
+            eprintln!(
+                "warning: {}: the target asks for P above N = {} at {cells} frequency cells in {} (up to {}); no set of {} points has P above N, so those cells stay below it and the loss cannot reach 0; scale the image down or raise -n",
+                args.target.display(),
+                args.n,
+                term.proj.name(),
+                crate::error::number(largest),
+                args.n
+            );
+        }
+    }
     // The wider grid the fit is also judged on, checked before any work.
     let wide = target.check_grid(args.n).map_err(in_file)?;
     let t0 = Instant::now();

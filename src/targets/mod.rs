@@ -244,6 +244,24 @@ pub struct TargetGrid {
 }
 
 impl TargetGrid {
+    /// The cells the fit weighs whose target is above `P = N`, which no set of `N` points reaches
+    /// (`|F(k)| ≤ N` at every `k`): their count and the largest such target; `None` if there are none
+    /// (a variance target has no `T`).
+    pub fn above_reach(&self) -> Option<(usize, f64)> {
+        if self.variance {
+            return None;
+        }
+        let n = self.n as f64;
+        let above: Vec<f64> = self
+            .target
+            .iter()
+            .zip(&self.weight)
+            .filter(|&(&t, &w)| w > 0.0 && t > n)
+            .map(|(&t, _)| t)
+            .collect();
+        (!above.is_empty()).then(|| (above.len(), above.iter().copied().fold(n, f64::max)))
+    }
+
     /// Number of annuli compared: `r = 0 ..` this, where annulus `r` holds the frequencies with
     /// `round(|k|) = r` and lies wholly inside the fit radius (`r + ½ ≤` fit radius).
     pub fn annuli(&self) -> usize {
@@ -1169,6 +1187,24 @@ mod tests {
             pixels,
             shape: [m, m],
         })
+    }
+
+    /// Cells asking for P above N are found (no set reaches them); a flat image asks for none.
+    #[test]
+    fn targets_above_n_are_found() {
+        let m = 32;
+        // Pixel (row i, column j) holds k = (j − 16, i − 16) at N = 256, extent 1. Dark at k = ±(1, 0).
+        let mut pixels = vec![1.0; m * m];
+        pixels[16 * m + 17] = 0.0;
+        pixels[16 * m + 15] = 0.0;
+        let flat = measured_image(pixels.clone(), m).grid(256).unwrap();
+        assert_eq!(flat.above_reach(), None);
+        // k = (4, 4) and (5, 4) ask for 1000; the image is made symmetric, so they and their mirrors
+        // read 500.5, 4 cells in all.
+        pixels[20 * m + 20] = 1000.0;
+        pixels[20 * m + 21] = 1000.0;
+        let peaks = measured_image(pixels, m).grid(256).unwrap();
+        assert_eq!(peaks.above_reach(), Some((4, 500.5)));
     }
 
     /// A spectrum of K bins used as a target with extent K/(2 sqrt N) gives every frequency its own

@@ -752,7 +752,7 @@ fn missing_input_files_are_input_errors() {
         "missing.toml",
         &out,
     );
-    // A target whose image is missing.
+    // A target whose image is missing: the message names the target, then its image.
     let image_target = dir.path().join("image.toml");
     std::fs::write(
         &image_target,
@@ -769,7 +769,11 @@ fn missing_input_files_are_input_errors() {
             "-o",
             o,
         ],
-        "no-image.npy",
+        &format!(
+            "{}: its image: cannot read {}",
+            image_target.display(),
+            dir.path().join("no-image.npy").display()
+        ),
         &out,
     );
     let report = dir.path().join("report");
@@ -3152,10 +3156,25 @@ fn radial_profiles_need_a_grid_of_4() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 2);
     let gallery = dir.path().join("g");
+    // Odd or tiny, --res is told what the gallery takes (before, --res 1 was told "e.g. --res 2").
+    for res in ["2", "1"] {
+        rejects(
+            &["gallery", "--res", res, "--out", gallery.to_str().unwrap()],
+            "give --res 4 or more",
+            &gallery,
+        );
+    }
+    // The gallery has no --exact: a tolerance out of range is not pointed at one.
+    let o = anisospec(&["gallery", "--eps", "0", "--out", gallery.to_str().unwrap()]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("choose eps in") && !e.contains("exact"), "{e}");
+    // A file where the gallery's own folder goes is named as that folder.
+    std::fs::create_dir(&gallery).unwrap();
+    std::fs::write(gallery.join("gallery"), "").unwrap();
     rejects(
-        &["gallery", "--res", "2", "--out", gallery.to_str().unwrap()],
-        "give --res 4 or more",
-        &gallery,
+        &["gallery", "--out", gallery.to_str().unwrap()],
+        "the gallery folder",
+        &gallery.join("gallery/index.md"),
     );
 }
 

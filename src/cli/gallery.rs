@@ -76,7 +76,7 @@ pub struct GalleryArgs {
 
 /// Runs `anisospec gallery`.
 pub fn run(args: &GalleryArgs) -> Result<()> {
-    check_res(args.res)?;
+    // The gallery's own lower limit first, so that --res 0 to 3 are told what the gallery takes.
     if args.res < 4 {
         // Every spectrum gets a radial profile, of the annuli r = 1 … K/2 − 1: none below K = 4.
         return Err(Error::Usage(format!(
@@ -84,6 +84,7 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
             args.res
         )));
     }
+    check_res(args.res)?;
     crate::stats::check_realizations("--realizations", args.realizations)?;
     if args.realizations == 0 {
         return Err(Error::Usage(
@@ -104,6 +105,13 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
     }
     crate::output::check_folder(&args.out, "--out", "gallery")?;
     let gallery = args.out.join("gallery");
+    // The folder the gallery goes into is --out/gallery: a file there is named as that folder.
+    crate::output::check_folder_fixed_by(
+        &gallery,
+        "the gallery folder",
+        "gallery",
+        "move that file, or give --out another folder",
+    )?;
     crate::output::check_report_folder(&gallery, GALLERY_MARKER)?;
     // The whole gallery or nothing: a failure leaves an earlier one as it was.
     write_folder(&gallery, GALLERY_MARKER, |dir| {

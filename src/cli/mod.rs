@@ -192,6 +192,18 @@ pub fn require_extension(path: &Path, flag: &str, ext: &str, what: &str) -> Resu
     )))
 }
 
+/// The Fourier method of a command with `--exact` and `--eps`: the exact DFT, or the NUFFT at `eps`
+/// (an `eps` out of range is refused, naming `--exact` as the way to exact sums).
+pub fn fourier_method(exact: bool, eps: f64) -> Result<crate::spectrum::Method> {
+    if exact {
+        return Ok(crate::spectrum::Method::Exact);
+    }
+    crate::spectrum::Method::nufft(eps).map_err(|e| match e {
+        Error::Usage(m) => Error::Usage(format!("{m}, or give --exact for the exact DFT")),
+        other => other,
+    })
+}
+
 /// The files a command writes beside one another from `-o output`, one per extension of `exts` (e.g.
 /// `out/oracle.exr` and `out/oracle.npy`). `output` may carry one of `exts`, in any case, or no
 /// extension; the file of its own extension is `output` exactly as given (`-o out/o.NPY` writes

@@ -141,9 +141,7 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
             number(args.tol)
         )));
     }
-    if !args.exact {
-        Method::nufft(args.eps)?;
-    }
+    crate::cli::fourier_method(args.exact, args.eps)?;
     if args.dims == 2 {
         let given: Vec<String> = [
             (args.strat_radius != DEFAULT_STRATA.radius, "--strat-radius"),

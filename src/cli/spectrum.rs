@@ -88,11 +88,7 @@ pub struct SpectrumArgs {
 pub fn run(args: &SpectrumArgs) -> Result<()> {
     let kinds = image_kinds(&args.output)?;
     check_res(args.res)?;
-    let method = if args.exact {
-        Method::Exact
-    } else {
-        Method::nufft(args.eps)?
-    };
+    let method = super::fourier_method(args.exact, args.eps)?;
     for (extra, flag, ext, what) in [
         (&args.radial, "--radial", "csv", "a CSV table"),
         (&args.stderr, "--stderr", "npy", "an npy array"),

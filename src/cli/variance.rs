@@ -5,7 +5,6 @@ use super::{sampler_with_shear, ShearArgs};
 use crate::error::Result;
 use crate::integrands::parse;
 use crate::samplers;
-use crate::spectrum::Method;
 use crate::variance::{predict_with_progress, write_csv, VarianceConfig, VariancePrediction};
 use std::path::PathBuf;
 
@@ -91,11 +90,7 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
     }
     let f = parse(&args.integrand)?;
     let sampler = sampler_with_shear(&args.sampler, f.dims(), &args.shear)?;
-    let method = if args.exact {
-        Method::Exact
-    } else {
-        Method::nufft(args.eps)?
-    };
+    let method = crate::cli::fourier_method(args.exact, args.eps)?;
     let cfg = VarianceConfig {
         res: args.res,
         res_per_n: args.res_per_n,

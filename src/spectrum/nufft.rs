@@ -307,7 +307,7 @@ impl Nufft2d {
         check_res(res)?;
         if !(EPS_MIN..=EPS_MAX).contains(&eps) {
             return Err(Error::Usage(format!(
-                "NUFFT tolerance {} is out of range; choose eps in [{EPS_MIN:e}, {EPS_MAX:e}] (e.g. 1e-6), or use the exact DFT",
+                "NUFFT tolerance {} is out of range; choose eps in [{EPS_MIN:e}, {EPS_MAX:e}] (e.g. 1e-6)",
                 crate::error::number(eps)
             )));
         }

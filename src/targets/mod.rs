@@ -360,7 +360,11 @@ impl Target {
         if let Target::Image(img) = &mut target {
             let dir = path.parent().unwrap_or(Path::new("."));
             let file = dir.join(&img.file);
-            let (pixels, shape) = read_image(&file)?;
+            // The image's own errors name it; say first which target file refers to it.
+            let (pixels, shape) = read_image(&file).map_err(|e| match e {
+                Error::Input(m) => Error::Input(format!("{}: its image: {m}", path.display())),
+                other => other,
+            })?;
             img.pixels = pixels;
             img.shape = shape;
         }

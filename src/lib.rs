@@ -11,6 +11,7 @@ pub mod compare;
 pub mod converge;
 pub mod error;
 pub mod exact_array;
+pub mod input;
 pub mod integrands;
 pub mod optimize;
 pub mod output;

@@ -80,9 +80,10 @@ fn gradient_error(obj: &Objective, set: &[f64]) -> f64 {
 #[test]
 fn gradient_matches_finite_differences_for_every_target_kind() {
     let dir = tempfile::tempdir().unwrap();
-    // A repulsion radius of 1.5 mean spacings makes many pairs interact, so that term is checked too.
+    // The widest repulsion allowed (1.07 mean spacings) makes many pairs of random points interact,
+    // so that term is checked too.
     let repulsion = Repulsion {
-        radius: 1.5,
+        radius: anisospec::optimize::MAX_REPULSION_RADIUS,
         weight: 1.0,
     };
     for (t, target) in all_target_kinds(dir.path()).into_iter().enumerate() {

@@ -179,7 +179,7 @@ impl CompareConfig {
     /// Reads a TOML config. A key left out takes the default suite's value; unknown keys and bad
     /// values are input errors.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::read_input(path, e))?;
+        let text = crate::input::read_text(path, "compare config")?;
         let config: Self = toml::from_str(&text).map_err(|e| {
             let message = e.to_string();
             let hint = misplaced_key_hint(&message).unwrap_or_default();

@@ -60,10 +60,8 @@ pub fn read_points(path: &Path) -> Result<PointSets> {
                     (super::MAX_COORDINATES * 8) >> 30
                 ))));
             }
-            let mut bytes = Vec::with_capacity(len as usize);
-            (&file)
-                .read_to_end(&mut bytes)
-                .map_err(|e| Error::read_input(path, e))?;
+            // Bounded also where the size says nothing (a device, a pipe).
+            let bytes = crate::input::read_npy_bytes(path, limit)?;
             parse_npy(&bytes)
         }
         Format::Text => match parse_text(std::io::BufReader::new(file), super::MAX_COORDINATES) {

@@ -108,7 +108,7 @@ impl SceneConfig {
     /// Reads a TOML scene file; a syntax error, an unknown key or a value out of range is
     /// [`Error::Input`] naming the file and the key.
     pub fn from_file(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| match Error::read_input(path, e) {
+        let text = crate::input::read_text(path, "scene file").map_err(|e| match e {
             // Every reason to refuse the file (missing, forbidden, a folder, not UTF-8) with its fix.
             Error::Input(m) => Error::Input(format!("{m} (a TOML scene file)")),
             other => other,

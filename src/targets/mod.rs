@@ -351,7 +351,7 @@ impl Target {
             .is_err_and(|e| e.kind() == std::io::ErrorKind::NotFound);
         let text = match built_in(path) {
             Some(text) if missing => text.to_string(),
-            _ => std::fs::read_to_string(path).map_err(|e| Error::read_input(path, e))?,
+            _ => crate::input::read_text(path, "target file")?,
         };
         let mut target = Self::parse(&text).map_err(|e| match e {
             Error::Input(m) => Error::Input(format!("{}: {m}", path.display())),
@@ -992,7 +992,8 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
 
 /// The values and `[rows, cols]` of a 2D npy array of `float64` or `float32`, in either order.
 fn read_npy_image(path: &Path, bad: &dyn Fn(String) -> Error) -> Result<(Vec<f64>, [usize; 2])> {
-    let bytes = std::fs::read(path).map_err(|e| Error::read_input(path, e))?;
+    // At most 2^27 pixels of float64 (a 8192 x 8192 spectrum is 2^26) and the header.
+    let bytes = crate::input::read_npy_bytes(path, (8 << 27) + (1 << 20))?;
     let (shape, pixels) = crate::points::io::parse_npy_array(&bytes, true).map_err(bad)?;
     let [rows, cols] = shape[..] else {
         return Err(bad(format!("shape {shape:?}")));
@@ -1118,7 +1119,8 @@ mod tests {
         let wide = Target::parse("kind = \"blue-noise\"\nradius = 1024\n").unwrap();
         let m = wide.grid(4).unwrap_err().to_string();
         assert!(
-            m.contains("darkens 13176795 frequency cells") && m.contains("fraction 3.036e-7."),
+            m.contains("darkens about 13176795 frequency cells")
+                && m.contains("fraction 3.036e-7."),
             "{m}"
         );
         let e = Target::parse("kind = \"blue-noise\"\nradius = 0.5\ndark_weight = 1e300\n");

@@ -165,12 +165,24 @@ pub fn write_spectrum_png(path: &Path, values: &[f64], res: usize, identity: &st
 /// A square `res × res` grey image scaled up by the smallest integer factor that makes its side at
 /// least `min_side` pixels (nearest neighbour). Returns the new side and its pixels, row-major.
 pub fn upscaled(grey: &[u8], res: usize, min_side: usize) -> (usize, Vec<u8>) {
-    let scale = min_side.div_ceil(res).max(1);
-    let side = res * scale;
-    let pixels = (0..side * side)
-        .map(|i| grey[(i / side / scale) * res + (i % side) / scale])
-        .collect();
+    let ([side, _], pixels) = upscaled_rect(grey, [res, res], min_side);
     (side, pixels)
+}
+
+/// A `width × height` grey image scaled up by the smallest integer factor that makes its longer side
+/// at least `min_side` pixels (nearest neighbour). Returns the new `[width, height]` and its pixels,
+/// row-major.
+pub fn upscaled_rect(
+    grey: &[u8],
+    [width, height]: [usize; 2],
+    min_side: usize,
+) -> ([usize; 2], Vec<u8>) {
+    let scale = min_side.div_ceil(width.max(height).max(1)).max(1);
+    let (w, h) = (width * scale, height * scale);
+    let pixels = (0..w * h)
+        .map(|i| grey[(i / w / scale) * width + (i % w) / scale])
+        .collect();
+    ([w, h], pixels)
 }
 
 /// Writes a spectrum as a one-channel (`Y`) EXR with the raw values, largest `k2` on top.

@@ -29,10 +29,15 @@ pub fn read_text(path: &Path, what: &str) -> Result<String> {
     })
 }
 
-/// The bytes of the npy file `path`, at most `limit` of them: a file that does not start with the
-/// npy magic is refused by its first 6 bytes, one longer than `limit` after `limit` bytes.
-pub fn read_npy_bytes(path: &Path, limit: u64) -> Result<Vec<u8>> {
-    let mut file = std::fs::File::open(path).map_err(|e| Error::read_input(path, e))?;
+/// The bytes of the npy file `file` (opened from `path`), at most `limit` of them. The outer error is
+/// a failure to read (naming `path`, see [`Error::read_input`]); the inner one the reason the bytes are
+/// not an npy file's, for the caller to word: a file that does not start with the npy magic is
+/// refused by its first 6 bytes, one longer than `limit` after `limit` bytes.
+pub fn read_npy_bytes(
+    mut file: std::fs::File,
+    path: &Path,
+    limit: u64,
+) -> Result<std::result::Result<Vec<u8>, String>> {
     let mut magic = [0u8; 6];
     let mut got = 0;
     while got < magic.len() {
@@ -44,22 +49,35 @@ pub fn read_npy_bytes(path: &Path, limit: u64) -> Result<Vec<u8>> {
         }
     }
     if &magic[..got] != NPY_MAGIC {
-        return Err(Error::Input(format!(
-            "{}: not an npy file (it does not start with the npy magic \\x93NUMPY); give a file numpy.save wrote",
-            path.display()
-        )));
+        return Ok(Err(if got == 0 {
+            "the file is empty".to_string()
+        } else {
+            "no npy magic \\x93NUMPY at the start".to_string()
+        }));
     }
     let mut bytes = magic.to_vec();
     file.take(limit.saturating_sub(6) + 1)
         .read_to_end(&mut bytes)
         .map_err(|e| Error::read_input(path, e))?;
     if bytes.len() as u64 > limit {
-        return Err(Error::Input(format!(
-            "{}: more than {limit} bytes, larger than any array it may hold; check the path",
-            path.display()
+        return Ok(Err(format!(
+            "more than {limit} bytes, larger than any array it may hold"
         )));
     }
-    Ok(bytes)
+    Ok(Ok(bytes))
+}
+
+/// Refuses a path that exists but is not a regular file (a device such as `/dev/zero`, a socket),
+/// for readers that would not stop on their own (e.g. the EXR decoder); a folder or a missing path is
+/// left to the reader's own message.
+pub fn check_regular(path: &Path) -> Result<()> {
+    match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() && !m.is_dir() => Err(Error::Input(format!(
+            "{} is not a regular file (a device, a pipe or a socket); give a file",
+            path.display()
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// The bytes of `path`, or the refusal `too_long` once more than `limit` have been read.
@@ -85,11 +103,14 @@ mod tests {
     #[test]
     fn endless_inputs_are_refused_not_read_whole() {
         let zero = Path::new("/dev/zero");
-        let e = read_npy_bytes(zero, 1 << 30).unwrap_err();
-        assert!(e.to_string().contains("not an npy file"), "{e}");
-        assert_eq!(e.exit_code(), 2);
+        let file = std::fs::File::open(zero).unwrap();
+        let why = read_npy_bytes(file, zero, 1 << 30).unwrap().unwrap_err();
+        assert_eq!(why, "no npy magic \\x93NUMPY at the start");
         let e = read_text(zero, "target file").unwrap_err();
         assert!(e.to_string().contains("more than 4 MiB"), "{e}");
+        assert_eq!(e.exit_code(), 2);
+        let e = check_regular(zero).unwrap_err();
+        assert!(e.to_string().contains("not a regular file"), "{e}");
         assert_eq!(e.exit_code(), 2);
     }
 
@@ -106,9 +127,21 @@ mod tests {
         let e = read_text(&text, "target file").unwrap_err();
         assert!(e.to_string().contains("UTF-8"), "{e}");
         let npy = dir.path().join("a.npy");
-        std::fs::write(&npy, b"\x93NUMPY rest").unwrap();
-        assert_eq!(read_npy_bytes(&npy, 100).unwrap(), b"\x93NUMPY rest");
-        let e = read_npy_bytes(&npy, 8).unwrap_err();
-        assert!(e.to_string().contains("more than 8 bytes"), "{e}");
+        let read = |contents: &[u8], limit: u64| {
+            std::fs::write(&npy, contents).unwrap();
+            read_npy_bytes(std::fs::File::open(&npy).unwrap(), &npy, limit).unwrap()
+        };
+        assert_eq!(read(b"\x93NUMPY rest", 100).unwrap(), b"\x93NUMPY rest");
+        assert_eq!(
+            read(b"\x93NUMPY rest", 8).unwrap_err(),
+            "more than 8 bytes, larger than any array it may hold"
+        );
+        assert_eq!(read(b"", 100).unwrap_err(), "the file is empty");
+        assert_eq!(
+            read(b"\x93NU", 100).unwrap_err(),
+            "no npy magic \\x93NUMPY at the start"
+        );
+        check_regular(&npy).unwrap();
+        check_regular(dir.path()).unwrap();
     }
 }

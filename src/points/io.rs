@@ -61,8 +61,12 @@ pub fn read_points(path: &Path) -> Result<PointSets> {
                 ))));
             }
             // Bounded also where the size says nothing (a device, a pipe).
-            let bytes = crate::input::read_npy_bytes(path, limit)?;
-            parse_npy(&bytes)
+            match crate::input::read_npy_bytes(file, path, limit)? {
+                Ok(bytes) => parse_npy(&bytes),
+                Err(why) => Err(Error::Input(format!(
+                    "not a readable npy point set ({why})"
+                ))),
+            }
         }
         Format::Text => match parse_text(std::io::BufReader::new(file), super::MAX_COORDINATES) {
             // A folder, or a failing disk: the message and exit code of any unreadable input.

@@ -942,6 +942,7 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
     let (pixels, [rows, cols]) = if is_exr {
+        crate::input::check_regular(path)?;
         if !path.is_file() {
             return Err(Error::Input(format!(
                 "{}: the target image does not exist; check the 'file' key (relative to the TOML file)",
@@ -992,8 +993,10 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
 
 /// The values and `[rows, cols]` of a 2D npy array of `float64` or `float32`, in either order.
 fn read_npy_image(path: &Path, bad: &dyn Fn(String) -> Error) -> Result<(Vec<f64>, [usize; 2])> {
-    // At most 2^27 pixels of float64 (a 8192 x 8192 spectrum is 2^26) and the header.
-    let bytes = crate::input::read_npy_bytes(path, (8 << 27) + (1 << 20))?;
+    // At most 1 GiB of values (2^27 float64 or 2^28 float32 pixels; an 8192 x 8192 spectrum is
+    // 2^26) and the header.
+    let file = std::fs::File::open(path).map_err(|e| Error::read_input(path, e))?;
+    let bytes = crate::input::read_npy_bytes(file, path, (1 << 30) + (1 << 20))?.map_err(bad)?;
     let (shape, pixels) = crate::points::io::parse_npy_array(&bytes, true).map_err(bad)?;
     let [rows, cols] = shape[..] else {
         return Err(bad(format!("shape {shape:?}")));

@@ -160,6 +160,9 @@ pub enum ImageKind {
 
 /// Checks every output path's extension before any work is done.
 pub fn image_kinds(outputs: &[PathBuf]) -> Result<Vec<ImageKind>> {
+    for p in outputs {
+        crate::output::check_file_name(p)?;
+    }
     outputs
         .iter()
         .map(|p| match extension(p).as_deref() {

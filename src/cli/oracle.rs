@@ -4,6 +4,7 @@ use crate::error::Result;
 use crate::output::oracle_map::{write_oracle_png, OracleMaps};
 use crate::render::oracle::{oracle_array, oracle_image, PixelClass, ORACLE_CHANNELS};
 use crate::render::Scene;
+use std::path::PathBuf;
 
 /// The classes in class order (their numbers in the EXR and npy, their colours in the PNG).
 const CLASSES: [PixelClass; 3] = [
@@ -11,7 +12,6 @@ const CLASSES: [PixelClass; 3] = [
     PixelClass::Hairline,
     PixelClass::DoubleWedge,
 ];
-use std::path::PathBuf;
 
 /// Writes the depth oracle of the scene as EXR, npy and a PNG picture.
 #[derive(clap::Args, Debug)]
@@ -67,7 +67,13 @@ pub fn run(args: &OracleArgs) -> Result<()> {
         crate::output::image::write_exr(&staged(exr), w, h, &channels)?;
         write_oracle_png(
             &staged(png),
-            &format!("Depth oracle, {w} x {h} pixels: class and shear per pixel"),
+            &format!(
+                "Depth oracle of {}, {w} x {h} pixels: class and shear per pixel",
+                args.scene.as_ref().map_or_else(
+                    || "the built-in scene".to_string(),
+                    |p| p.display().to_string()
+                )
+            ),
             &maps,
         )
     })?;

@@ -38,8 +38,11 @@ pub struct SampleArgs {
 
 /// Runs `anisospec sample`.
 pub fn run(args: &SampleArgs) -> Result<()> {
-    check_outputs(&[&args.output], &samplers::input_files(&args.sampler))?;
+    // A name that is no file first (-o .txt has no extension to tell), then the format, then the
+    // path's folders.
+    crate::output::check_file_name(&args.output)?;
     Format::of(&args.output)?;
+    check_outputs(&[&args.output], &samplers::input_files(&args.sampler))?;
     let sampler = sampler_with_shear(&args.sampler, args.dims, &args.shear)?;
     let sets = generate_sets(sampler.as_ref(), args.n, args.sets, args.seed)?;
     write_points(&args.output, &sets)?;

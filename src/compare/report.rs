@@ -189,19 +189,19 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
     write_atomic(&out.join("robustness.csv"), |w| {
         writeln!(
             w,
-            "subject,sampler,shear_error,moved_by_oracle,n,realizations,mse,mse_stderr"
+            "subject,sampler,shear_error,n,realizations,mse,mse_stderr,moved_by_oracle"
         )?;
         for row in &outcome.robustness {
             writeln!(
                 w,
-                "\"{}\",\"{}\",{},{},{},{r},{},{}",
+                "\"{}\",\"{}\",{},{},{r},{},{},{}",
                 row.subject,
                 row.sampler,
                 row.error,
-                row.moved,
                 row.point.n,
                 row.point.mse,
-                row.point.mse_stderr
+                row.point.mse_stderr,
+                row.moved
             )?;
         }
         Ok(())

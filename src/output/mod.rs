@@ -708,12 +708,7 @@ const MAX_NAME_BYTES: usize = 255;
 pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<()> {
     let mut probed: Vec<&Path> = Vec::new();
     for (i, out) in outputs.iter().enumerate() {
-        if names_no_file(out) {
-            return Err(Error::Usage(format!(
-                "the output {} has no usable file name (it ends in a folder, or is an extension alone); give a file path such as out/name.npy",
-                out.display()
-            )));
-        }
+        check_file_name(out)?;
         if let Some(input) = inputs.iter().find(|input| same_file(out, input)) {
             return Err(Error::Usage(format!(
                 "the output {} is the input file {}; choose another output name",
@@ -812,6 +807,29 @@ pub fn names_no_file(path: &Path) -> bool {
             .any(|e| e.eq_ignore_ascii_case(rest))
     });
     path.file_name().is_none() || matches!(last, "" | "." | "..") || bare_extension
+}
+
+/// Refuses an output path that names no file ([`names_no_file`]), suggesting a name with the
+/// extension it was given (`y.png/`: `out/name.png`), else `.npy`.
+pub fn check_file_name(out: &Path) -> Result<()> {
+    if !names_no_file(out) {
+        return Ok(());
+    }
+    let text = out.as_os_str().to_string_lossy();
+    let last = text
+        .trim_end_matches(std::path::is_separator)
+        .rsplit(std::path::is_separator)
+        .next()
+        .unwrap_or_default();
+    let ext = last
+        .rfind('.')
+        .map(|i| &last[i + 1..])
+        .filter(|e| !e.is_empty() && e.chars().all(|c| c.is_ascii_alphanumeric()))
+        .unwrap_or("npy");
+    Err(Error::Usage(format!(
+        "the output {} has no usable file name (it ends in a folder, or is an extension alone); give a file path such as out/name.{ext}",
+        out.display()
+    )))
 }
 
 /// Refuses a folder `dir` (given by `flag`, holding the `what`) that is, or lies under, an existing

@@ -7,8 +7,12 @@ use crate::error::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
 
-/// Colours of the classes, in class order (in focus, hairline, double wedge): grey, blue, orange.
-pub const CLASS_COLOURS: [(u8, u8, u8); 3] = [(200, 200, 200), (31, 119, 180), (255, 127, 14)];
+/// Colours of the classes, in class order (in focus, hairline, double wedge), with their names.
+pub const CLASS_COLOURS: [(&str, (u8, u8, u8)); 3] = [
+    ("grey", (200, 200, 200)),
+    ("blue", (31, 119, 180)),
+    ("orange", (255, 127, 14)),
+];
 /// Colour of the most negative shear of the map (blue); 0 is white.
 const NEGATIVE: (u8, u8, u8) = (33, 102, 172);
 /// Colour of the most positive shear of the map (red).
@@ -19,6 +23,9 @@ const MIN_SIDE: usize = 256;
 const MAX_SIDE: usize = 512;
 /// Gap around and between the panels, pixels.
 const GAP: usize = 8;
+/// Smallest width of each panel's column, pixels: its caption, legend or colour bar fit in it
+/// however narrow the scene (a 16 x 256 scene's panel is 16 px wide).
+const MIN_COLUMN: usize = 250;
 /// Room for one line of the title (18 px text), pixels.
 const TITLE_LINE: usize = 24;
 /// Room for a panel's caption above it, pixels.
@@ -99,7 +106,8 @@ pub fn write_oracle_png(path: &Path, title: &str, maps: &OracleMaps) -> Result<(
         .filter(|s| s.is_finite())
         .fold(0.0f64, |m, s| m.max(s.abs()));
     let limit = if limit > 0.0 { limit } else { 1.0 };
-    let width = (3 * GAP + 2 * pw).max(520);
+    let column = pw.max(MIN_COLUMN);
+    let width = 3 * GAP + 2 * column;
     let title_lines = wrap(title, 18, (width - 2 * GAP) as u32);
     let top = GAP + TITLE_LINE * title_lines.len() + CAPTION;
     let under = (LEGEND_ROW * maps.class_names.len()).max(BAR + 40);
@@ -121,7 +129,7 @@ pub fn write_oracle_png(path: &Path, title: &str, maps: &OracleMaps) -> Result<(
         for (i, line) in title_lines.iter().enumerate() {
             text(line, GAP, GAP + i * TITLE_LINE, 18).map_err(|e| fail(&e))?;
         }
-        let (left, right) = (GAP, 2 * GAP + pw);
+        let (left, right) = (GAP, 2 * GAP + column);
         text("class", left, top - CAPTION + 4, 14).map_err(|e| fail(&e))?;
         text(
             "shear sx (pixels per lens width)",
@@ -133,7 +141,7 @@ pub fn write_oracle_png(path: &Path, title: &str, maps: &OracleMaps) -> Result<(
         for y in 0..ph {
             for x in 0..pw {
                 let i = scene_at(x, y);
-                let (r, g, b) = CLASS_COLOURS[maps.classes[i]];
+                let (r, g, b) = CLASS_COLOURS[maps.classes[i]].1;
                 pixel(left + x, top + y, RGBColor(r, g, b)).map_err(|e| fail(&e))?;
                 pixel(right + x, top + y, shear_colour(maps.shear[i], limit))
                     .map_err(|e| fail(&e))?;
@@ -142,7 +150,7 @@ pub fn write_oracle_png(path: &Path, title: &str, maps: &OracleMaps) -> Result<(
         // The legend: a swatch per class with its name and pixel count.
         for (c, name) in maps.class_names.iter().enumerate() {
             let y = top + ph + GAP + c * LEGEND_ROW;
-            let (r, g, b) = CLASS_COLOURS[c];
+            let (r, g, b) = CLASS_COLOURS[c].1;
             for dy in 0..12 {
                 for dx in 0..12 {
                     pixel(left + dx, y + dy, RGBColor(r, g, b)).map_err(|e| fail(&e))?;
@@ -151,15 +159,17 @@ pub fn write_oracle_png(path: &Path, title: &str, maps: &OracleMaps) -> Result<(
             text(&format!("{name}: {} px", counts[c]), left + 18, y - 1, 13)
                 .map_err(|e| fail(&e))?;
         }
-        // The colour bar: the shear map's own colours from −limit to +limit, with both ends and 0.
+        // The colour bar, the width of its column: the shear map's own colours from −limit to
+        // +limit, with both ends and 0.
         let bar_y = top + ph + GAP;
-        for x in 0..pw {
-            let s = -limit + (x as f64 + 0.5) / pw as f64 * 2.0 * limit;
+        let bar = column;
+        for x in 0..bar {
+            let s = -limit + (x as f64 + 0.5) / bar as f64 * 2.0 * limit;
             for dy in 0..BAR {
                 pixel(right + x, bar_y + dy, shear_colour(s, limit)).map_err(|e| fail(&e))?;
             }
         }
-        for (at, value) in [(0, -limit), (pw / 2, 0.0), (pw - 1, limit)] {
+        for (at, value) in [(0, -limit), (bar / 2, 0.0), (bar - 1, limit)] {
             for dy in 0..3 {
                 pixel(right + at, bar_y + BAR + dy, BLACK).map_err(|e| fail(&e))?;
             }
@@ -169,10 +179,10 @@ pub fn write_oracle_png(path: &Path, title: &str, maps: &OracleMaps) -> Result<(
                 short_number(value)
             };
             // The end labels stay within the bar: the left one starts at it, the right one ends at it.
-            let centred = at == pw / 2;
+            let centred = at == bar / 2;
             let x = match at {
                 0 => right,
-                a if a == pw - 1 => (right + pw).saturating_sub(text_width(&label, 12) as usize),
+                a if a == bar - 1 => (right + bar).saturating_sub(text_width(&label, 12) as usize),
                 a => right + a,
             };
             draw_text(
@@ -192,8 +202,8 @@ pub fn write_oracle_png(path: &Path, title: &str, maps: &OracleMaps) -> Result<(
         maps.class_names
             .iter()
             .zip(&counts)
-            .zip(["grey", "blue", "orange"])
-            .map(|((name, n), colour)| format!("{name} {colour}, {n} px"))
+            .zip(CLASS_COLOURS)
+            .map(|((name, n), (colour, _))| format!("{name} {colour}, {n} px"))
             .collect::<Vec<_>>()
             .join("; "),
         short_number(-limit),
@@ -243,7 +253,7 @@ mod tests {
                 let (px, py) = (x * scale + scale / 2, top + y * scale + scale / 2);
                 assert_eq!(
                     rgb(&data, width, GAP + px, py),
-                    CLASS_COLOURS[classes[i]],
+                    CLASS_COLOURS[classes[i]].1,
                     "class of ({x}, {y})"
                 );
                 let c = shear_colour(shear[i], 1.0);
@@ -263,6 +273,48 @@ mod tests {
             text[0].text.contains("hairline blue, 2 px"),
             "{}",
             text[0].text
+        );
+    }
+
+    /// A narrow scene's panels stand in columns wide enough for their captions, legend and colour
+    /// bar: the bar starts at the right column and spans it, clear of the legend.
+    #[test]
+    fn a_narrow_scene_keeps_its_legend_and_colour_bar_apart() {
+        let (w, h) = (1, 8);
+        let classes = [0, 1, 2, 0, 1, 2, 0, 1];
+        let shear = [-2.0, -1.0, 0.0, 1.0, 2.0, 0.0, 0.0, 0.0];
+        let maps = OracleMaps {
+            size: [w, h],
+            classes: &classes,
+            class_names: &["in-focus", "hairline", "double-wedge"],
+            shear: &shear,
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("o.png");
+        write_oracle_png(&path, "oracle", &maps).unwrap();
+        let mut reader =
+            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()))
+                .read_info()
+                .unwrap();
+        let mut data = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut data).unwrap();
+        let width = info.width as usize;
+        assert_eq!(width, 3 * GAP + 2 * MIN_COLUMN);
+        // Scaled by 32: a 32 x 256 panel; the bar's row lies under it, in the right column.
+        let top = GAP + TITLE_LINE + CAPTION;
+        let (right, bar_y) = (2 * GAP + MIN_COLUMN, top + 256 + GAP + BAR / 2);
+        let c = shear_colour(-2.0 + 0.5 / MIN_COLUMN as f64 * 4.0, 2.0);
+        assert_eq!(rgb(&data, width, right, bar_y), (c.0, c.1, c.2));
+        let last = -2.0 + (MIN_COLUMN as f64 - 0.5) / MIN_COLUMN as f64 * 4.0;
+        let c = shear_colour(last, 2.0);
+        assert_eq!(
+            rgb(&data, width, right + MIN_COLUMN - 1, bar_y),
+            (c.0, c.1, c.2)
+        );
+        // Between the columns (the gap after the left column's legend) nothing is drawn.
+        assert_eq!(
+            rgb(&data, width, GAP + MIN_COLUMN + GAP / 2, bar_y),
+            (255, 255, 255)
         );
     }
 

@@ -194,6 +194,37 @@ pub fn write_spectrum_exr(path: &Path, values: &[f64], res: usize) -> Result<()>
     write_exr(path, res, res, &[("Y", rows)])
 }
 
+/// A PNG read back for tests: its size, its pixels (row-major, as stored) and its description.
+#[cfg(test)]
+pub(crate) struct DecodedPng {
+    pub width: usize,
+    pub height: usize,
+    pub data: Vec<u8>,
+    pub description: Option<String>,
+}
+
+/// Reads the PNG at `path` (tests only; panics on a bad file).
+#[cfg(test)]
+pub(crate) fn decode_png(path: &Path) -> DecodedPng {
+    let file = std::io::BufReader::new(std::fs::File::open(path).expect("the PNG exists"));
+    let mut reader = png::Decoder::new(file).read_info().expect("a PNG header");
+    let mut data = vec![0; reader.output_buffer_size().expect("a PNG of sane size")];
+    let frame = reader.next_frame(&mut data).expect("PNG pixels");
+    data.truncate(frame.buffer_size());
+    let description = reader
+        .info()
+        .uncompressed_latin1_text
+        .iter()
+        .find(|t| t.keyword == "Description")
+        .map(|t| t.text.clone());
+    DecodedPng {
+        width: frame.width as usize,
+        height: frame.height as usize,
+        data,
+        description,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -216,6 +216,14 @@ pub fn write_oracle_png(path: &Path, title: &str, maps: &OracleMaps) -> Result<(
 mod tests {
     use super::*;
 
+    /// The oracle PNG of `maps`, titled "oracle", read back.
+    fn drawn(maps: &OracleMaps) -> crate::output::image::DecodedPng {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("o.png");
+        write_oracle_png(&path, "oracle", maps).unwrap();
+        crate::output::image::decode_png(&path)
+    }
+
     fn rgb(data: &[u8], width: usize, x: usize, y: usize) -> (u8, u8, u8) {
         let i = 3 * (y * width + x);
         (data[i], data[i + 1], data[i + 2])
@@ -232,16 +240,8 @@ mod tests {
             class_names: &["in-focus", "hairline", "double-wedge"],
             shear: &shear,
         };
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("o.png");
-        write_oracle_png(&path, "oracle", &maps).unwrap();
-        let mut reader =
-            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()))
-                .read_info()
-                .unwrap();
-        let mut data = vec![0; reader.output_buffer_size().unwrap()];
-        let info = reader.next_frame(&mut data).unwrap();
-        let width = info.width as usize;
+        let png = drawn(&maps);
+        let (width, data) = (png.width, &png.data);
         // Scaled up by 64: scene pixel (x, y) is the 64-pixel block at (GAP + 64x, top + 64y).
         let scale = 64;
         assert_eq!(panel_scale(4, 2), scale as f64);
@@ -252,13 +252,13 @@ mod tests {
                 let i = y * 4 + x;
                 let (px, py) = (x * scale + scale / 2, top + y * scale + scale / 2);
                 assert_eq!(
-                    rgb(&data, width, GAP + px, py),
+                    rgb(data, width, GAP + px, py),
                     CLASS_COLOURS[classes[i]].1,
                     "class of ({x}, {y})"
                 );
                 let c = shear_colour(shear[i], 1.0);
                 assert_eq!(
-                    rgb(&data, width, right + px, py),
+                    rgb(data, width, right + px, py),
                     (c.0, c.1, c.2),
                     "shear of ({x}, {y})"
                 );
@@ -268,12 +268,8 @@ mod tests {
         assert_eq!(shear_colour(-1.0, 1.0), RGBColor(33, 102, 172));
         assert_eq!(shear_colour(0.0, 1.0), WHITE);
         assert_eq!(shear_colour(f64::NAN, 1.0), BLACK);
-        let text = &reader.info().uncompressed_latin1_text;
-        assert!(
-            text[0].text.contains("hairline blue, 2 px"),
-            "{}",
-            text[0].text
-        );
+        let text = png.description.unwrap_or_default();
+        assert!(text.contains("hairline blue, 2 px"), "{text}");
     }
 
     /// A narrow scene's panels stand in columns wide enough for their captions, legend and colour
@@ -289,31 +285,23 @@ mod tests {
             class_names: &["in-focus", "hairline", "double-wedge"],
             shear: &shear,
         };
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("o.png");
-        write_oracle_png(&path, "oracle", &maps).unwrap();
-        let mut reader =
-            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()))
-                .read_info()
-                .unwrap();
-        let mut data = vec![0; reader.output_buffer_size().unwrap()];
-        let info = reader.next_frame(&mut data).unwrap();
-        let width = info.width as usize;
+        let png = drawn(&maps);
+        let (width, data) = (png.width, &png.data);
         assert_eq!(width, 3 * GAP + 2 * MIN_COLUMN);
         // Scaled by 32: a 32 x 256 panel; the bar's row lies under it, in the right column.
         let top = GAP + TITLE_LINE + CAPTION;
         let (right, bar_y) = (2 * GAP + MIN_COLUMN, top + 256 + GAP + BAR / 2);
         let c = shear_colour(-2.0 + 0.5 / MIN_COLUMN as f64 * 4.0, 2.0);
-        assert_eq!(rgb(&data, width, right, bar_y), (c.0, c.1, c.2));
+        assert_eq!(rgb(data, width, right, bar_y), (c.0, c.1, c.2));
         let last = -2.0 + (MIN_COLUMN as f64 - 0.5) / MIN_COLUMN as f64 * 4.0;
         let c = shear_colour(last, 2.0);
         assert_eq!(
-            rgb(&data, width, right + MIN_COLUMN - 1, bar_y),
+            rgb(data, width, right + MIN_COLUMN - 1, bar_y),
             (c.0, c.1, c.2)
         );
         // Between the columns (the gap after the left column's legend) nothing is drawn.
         assert_eq!(
-            rgb(&data, width, GAP + MIN_COLUMN + GAP / 2, bar_y),
+            rgb(data, width, GAP + MIN_COLUMN + GAP / 2, bar_y),
             (255, 255, 255)
         );
     }

@@ -303,13 +303,9 @@ mod tests {
         let (exr, png) = (dir.path().join("i.exr"), dir.path().join("i.png"));
         let y = [0.0, 0.25, 1.0, 3.0, 0.5, 0.5, 0.5, 0.5];
         write_image_pair(&exr, &png, 4, 2, &[("Y", &y)]).unwrap();
-        let mut reader =
-            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()))
-                .read_info()
-                .unwrap();
-        let mut data = vec![0; reader.output_buffer_size().unwrap()];
-        let info = reader.next_frame(&mut data).unwrap();
-        assert_eq!((info.width, info.height), (256, 128));
+        let decoded = crate::output::image::decode_png(&png);
+        assert_eq!((decoded.width, decoded.height), (256, 128));
+        let data = decoded.data;
         let grey = |v: f64| ((v / PNG_WHITE).min(1.0).powf(1.0 / 2.2) * 255.0).round() as u8;
         for (i, &v) in y.iter().enumerate() {
             let (x, row) = (i % 4, i / 4);

@@ -1,5 +1,6 @@
-//! Reading the files a user names, bounded: a device or a pipe that never ends (a link to
-//! `/dev/zero`, say) is refused after a limit, or by its first bytes, not read until memory runs out.
+//! Reading the files a user names, bounded: a device that never ends (a link to `/dev/zero`, say)
+//! is refused after a limit, or by its first bytes, not read until memory runs out. (A named pipe
+//! with no writer is waited on, as any program reading it would.)
 
 use crate::error::{Error, Result};
 use std::io::Read;

@@ -3769,6 +3769,31 @@ fn outputs_that_name_no_file_are_refused_before_the_work() {
     for (args, needle) in &cases {
         rejects(args, needle, &dir.path().join("y.npy"));
     }
+    // The name suggested has an extension the command writes: the one given if it can, else its
+    // first. And "-", standard output elsewhere, is no file here (render and oracle wrote -.exr).
+    let png_slash = at("a.png/");
+    let more: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["sample", "--sampler", "mj", "-n", "16", "-o", &png_slash],
+            "out/name.npy",
+        ),
+        (
+            vec!["spectrum", "--sampler", "mj", "-n", "16", "-o", &png_slash],
+            "out/name.png",
+        ),
+        (
+            vec!["sample", "--sampler", "mj", "-n", "16", "-o", "-"],
+            "standard output",
+        ),
+        (
+            vec!["render", "--sampler", "mj", "-o", "-"],
+            "standard output",
+        ),
+        (vec!["oracle", "-o", "-"], "standard output"),
+    ];
+    for (args, needle) in &more {
+        rejects(args, needle, Path::new("-.exr"));
+    }
     assert_eq!(
         std::fs::read_dir(dir.path()).unwrap().count(),
         0,

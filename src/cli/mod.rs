@@ -161,7 +161,7 @@ pub enum ImageKind {
 /// Checks every output path's extension before any work is done.
 pub fn image_kinds(outputs: &[PathBuf]) -> Result<Vec<ImageKind>> {
     for p in outputs {
-        crate::output::check_file_name(p)?;
+        crate::output::check_file_name(p, &["npy", "exr", "png"])?;
     }
     outputs
         .iter()
@@ -216,7 +216,7 @@ pub fn fourier_method(exact: bool, eps: f64) -> Result<crate::spectrum::Method> 
 pub fn sibling_outputs(output: &Path, exts: &[&str]) -> Result<Vec<PathBuf>> {
     if crate::output::names_no_file(output) {
         return Err(Error::Usage(format!(
-            "-o {} has no usable file name; give a path such as out/image.{}",
+            "-o {} has no usable file name (a folder, an extension alone, or - for standard output, which is not written to); give a path such as out/image.{}",
             output.display(),
             exts[0]
         )));

@@ -69,9 +69,13 @@ pub fn run(args: &OracleArgs) -> Result<()> {
             &staged(png),
             &format!(
                 "Depth oracle of {}, {w} x {h} pixels: class and shear per pixel",
+                // The file's name alone: a long folder path would run off the picture.
                 args.scene.as_ref().map_or_else(
                     || "the built-in scene".to_string(),
-                    |p| p.display().to_string()
+                    |p| p.file_name().map_or_else(
+                        || p.display().to_string(),
+                        |f| f.to_string_lossy().into_owned()
+                    )
                 )
             ),
             &maps,

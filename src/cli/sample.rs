@@ -40,7 +40,7 @@ pub struct SampleArgs {
 pub fn run(args: &SampleArgs) -> Result<()> {
     // A name that is no file first (-o .txt has no extension to tell), then the format, then the
     // path's folders.
-    crate::output::check_file_name(&args.output)?;
+    crate::output::check_file_name(&args.output, &["npy", "txt"])?;
     Format::of(&args.output)?;
     check_outputs(&[&args.output], &samplers::input_files(&args.sampler))?;
     let sampler = sampler_with_shear(&args.sampler, args.dims, &args.shear)?;

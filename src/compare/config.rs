@@ -524,10 +524,15 @@ impl CompareConfig {
             .collect();
         for path in &self.tables {
             let target = crate::targets::Target::load(path).map_err(|e| {
-                Error::Usage(format!(
-                    "table target {}: {e}; tables = [...] lists target files, relative to the folder compare runs in (the shipped targets/*.toml that need no image are also built in, read from the binary where no such file exists); give files that exist",
-                    path.display()
-                ))
+                // A missing file gets the list's own rule; any other error names the file itself.
+                if std::fs::symlink_metadata(path).is_err() {
+                    Error::Usage(format!(
+                        "table target {}: {e}; tables = [...] lists target files, relative to the folder compare runs in (the shipped targets/*.toml that need no image are also built in, read from the binary where no such file exists); give files that exist",
+                        path.display()
+                    ))
+                } else {
+                    Error::Usage(format!("table target: {e}"))
+                }
             })?;
             if matches!(target, crate::targets::Target::DoubleWedge(_)) {
                 self.check_wedge_shears(path)?;

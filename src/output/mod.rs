@@ -208,8 +208,12 @@ pub struct ReportMarker {
 impl ReportMarker {
     /// Whether `dir` holds this marker: the file, starting with the line.
     fn is_in(&self, dir: &Path) -> bool {
-        std::fs::read_to_string(dir.join(self.file))
-            .is_ok_and(|text| text.lines().next() == Some(self.first_line))
+        // The first line alone, read from at most 4 KiB (the file may be anything, even a device).
+        let mut head = Vec::new();
+        std::fs::File::open(dir.join(self.file))
+            .and_then(|f| std::io::Read::read_to_end(&mut std::io::Read::take(f, 4096), &mut head))
+            .is_ok()
+            && String::from_utf8_lossy(&head).lines().next() == Some(self.first_line)
     }
 }
 
@@ -560,10 +564,10 @@ fn read_manifest(dest: &Path) -> Result<Option<Vec<PathBuf>>> {
             path.display()
         ))
     };
-    let text = match std::fs::read_to_string(&path) {
+    let text = match crate::input::read_text(&path, "list of a report's files") {
         Ok(text) => text,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) if e.kind() == std::io::ErrorKind::InvalidData => {
+        Err(_) if std::fs::symlink_metadata(&path).is_err() => return Ok(None),
+        Err(Error::Input(m)) if m.contains("UTF-8") => {
             return Err(foreign("was not written by anisospec (it is not text)"))
         }
         Err(e) => return Err(foreign(&format!("cannot be read ({e})"))),
@@ -708,7 +712,7 @@ const MAX_NAME_BYTES: usize = 255;
 pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf]) -> Result<()> {
     let mut probed: Vec<&Path> = Vec::new();
     for (i, out) in outputs.iter().enumerate() {
-        check_file_name(out)?;
+        check_file_name(out, &[])?;
         if let Some(input) = inputs.iter().find(|input| same_file(out, input)) {
             return Err(Error::Usage(format!(
                 "the output {} is the input file {}; choose another output name",
@@ -794,8 +798,12 @@ fn os_error(e: &std::io::Error) -> std::io::Error {
 
 /// Whether `path` names no file it could be written to: a folder (`out/`, `out/.`, `..`, `/`: a
 /// trailing separator would be dropped by the path's file name, and the run would fail only when it
-/// writes) or an extension alone (`out/.npy`, which would become a hidden file).
+/// writes), an extension alone (`out/.npy`, which would become a hidden file), or `-`, which
+/// commands elsewhere take for standard output, where nothing here writes.
 pub fn names_no_file(path: &Path) -> bool {
+    if path.as_os_str() == "-" {
+        return true;
+    }
     let text = path.as_os_str().to_string_lossy();
     let last = text
         .rsplit(std::path::is_separator)
@@ -810,10 +818,17 @@ pub fn names_no_file(path: &Path) -> bool {
 }
 
 /// Refuses an output path that names no file ([`names_no_file`]), suggesting a name with the
-/// extension it was given (`y.png/`: `out/name.png`), else `.npy`.
-pub fn check_file_name(out: &Path) -> Result<()> {
+/// extension it was given (`y.png/`: `out/name.png`) when it is one of `writes` (the extensions the
+/// command writes; empty: any), else the first of `writes` (or `.npy`).
+pub fn check_file_name(out: &Path, writes: &[&str]) -> Result<()> {
     if !names_no_file(out) {
         return Ok(());
+    }
+    if out.as_os_str() == "-" {
+        return Err(Error::Usage(format!(
+            "the output - would be standard output, which no command writes to; give a file path such as out/name.{}",
+            writes.first().unwrap_or(&"npy")
+        )));
     }
     let text = out.as_os_str().to_string_lossy();
     let last = text
@@ -825,7 +840,8 @@ pub fn check_file_name(out: &Path) -> Result<()> {
         .rfind('.')
         .map(|i| &last[i + 1..])
         .filter(|e| !e.is_empty() && e.chars().all(|c| c.is_ascii_alphanumeric()))
-        .unwrap_or("npy");
+        .filter(|e| writes.is_empty() || writes.iter().any(|w| w.eq_ignore_ascii_case(e)))
+        .unwrap_or(writes.first().unwrap_or(&"npy"));
     Err(Error::Usage(format!(
         "the output {} has no usable file name (it ends in a folder, or is an extension alone); give a file path such as out/name.{ext}",
         out.display()

@@ -64,7 +64,8 @@ pub fn read_points(path: &Path) -> Result<PointSets> {
             match crate::input::read_npy_bytes(file, path, limit)? {
                 Ok(bytes) => parse_npy(&bytes),
                 Err(why) => Err(Error::Input(format!(
-                    "not a readable npy point set ({why})"
+                    "not a readable npy point set ({why}); give a float64 npy array [sets, N, D] or \
+                     [N, D] (numpy.save, anisospec sample), or name a text point file .txt"
                 ))),
             }
         }

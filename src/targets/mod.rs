@@ -943,6 +943,12 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
     let (pixels, [rows, cols]) = if is_exr {
         crate::input::check_regular(path)?;
+        if path.is_dir() {
+            return Err(Error::Input(format!(
+                "{}: the target image is a folder; name an EXR or npy file in the 'file' key (relative to the TOML file)",
+                path.display()
+            )));
+        }
         if !path.is_file() {
             return Err(Error::Input(format!(
                 "{}: the target image does not exist; check the 'file' key (relative to the TOML file)",
@@ -996,7 +1002,17 @@ fn read_npy_image(path: &Path, bad: &dyn Fn(String) -> Error) -> Result<(Vec<f64
     // At most 1 GiB of values (2^27 float64 or 2^28 float32 pixels; an 8192 x 8192 spectrum is
     // 2^26) and the header.
     let file = std::fs::File::open(path).map_err(|e| Error::read_input(path, e))?;
-    let bytes = crate::input::read_npy_bytes(file, path, (1 << 30) + (1 << 20))?.map_err(bad)?;
+    let limit = (1u64 << 30) + (1 << 20);
+    let size = file
+        .metadata()
+        .map_err(|e| Error::read_input(path, e))?
+        .len();
+    if size > limit {
+        return Err(bad(format!(
+            "{size} bytes, more than 1 GiB of values (2^27 float64 or 2^28 float32 pixels)"
+        )));
+    }
+    let bytes = crate::input::read_npy_bytes(file, path, limit)?.map_err(bad)?;
     let (shape, pixels) = crate::points::io::parse_npy_array(&bytes, true).map_err(bad)?;
     let [rows, cols] = shape[..] else {
         return Err(bad(format!("shape {shape:?}")));

@@ -6,7 +6,7 @@ use crate::optimize::{
     self, lattice_design, loss::Repulsion, metrics, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
     DEFAULT_LIMITS, DEFAULT_REPULSION, DEFAULT_STRATA,
 };
-use crate::output::{check_outputs, write_atomic, write_group};
+use crate::output::{check_outputs, csv_number, write_atomic, write_group};
 use crate::points::io::write_points;
 use crate::points::PointSets;
 use crate::samplers;
@@ -390,7 +390,11 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
                     writeln!(
                         w,
                         "{},{},{},{},{}",
-                        r.set, row.iter, row.seconds, row.loss, row.solver
+                        r.set,
+                        row.iter,
+                        csv_number(row.seconds),
+                        csv_number(row.loss),
+                        row.solver
                     )?;
                 }
             }

@@ -8,7 +8,7 @@ use crate::converge::{plot, Convergence};
 use crate::error::Result;
 use crate::output::plot::{write_loglog_png, LogLogPlot, Series, XScale};
 use crate::output::sheet::{write_sheet, Panel};
-use crate::output::{write_atomic, write_npy, ReportMarker};
+use crate::output::{csv_number, write_atomic, write_npy, ReportMarker};
 use crate::points::Projection;
 use crate::spectrum::expected::of_sampler;
 use crate::spectrum::Method;
@@ -164,23 +164,24 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
                 s.fit
                     .map_or((String::new(), String::new(), String::new()), |f| {
                         let (lo, hi) = f.interval().map_or((String::new(), String::new()), |i| {
-                            (i.0.to_string(), i.1.to_string())
+                            (csv_number(i.0), csv_number(i.1))
                         });
-                        (f.slope.to_string(), lo, hi)
+                        (csv_number(f.slope), lo, hi)
                     });
             for (p, setup) in s.points.iter().zip(&s.setup_seconds) {
                 writeln!(
                     w,
-                    "\"{}\",{},{integral},\"{}\",{},{},{r},{},{},{},{},{slope},{lo},{hi}",
+                    "\"{}\",{},{},\"{}\",{},{},{r},{},{},{},{},{slope},{lo},{hi}",
                     s.subject,
                     s.class,
+                    csv_number(integral),
                     s.sampler,
                     s.family,
                     p.n,
-                    p.mse,
-                    p.mse_stderr,
-                    p.median_seconds,
-                    setup
+                    csv_number(p.mse),
+                    csv_number(p.mse_stderr),
+                    csv_number(p.median_seconds),
+                    csv_number(*setup)
                 )?;
             }
         }
@@ -197,10 +198,10 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
                 "\"{}\",\"{}\",{},{},{r},{},{},{}",
                 row.subject,
                 row.sampler,
-                row.error,
+                csv_number(row.error),
                 row.point.n,
-                row.point.mse,
-                row.point.mse_stderr,
+                csv_number(row.point.mse),
+                csv_number(row.point.mse_stderr),
                 row.moved
             )?;
         }

@@ -256,6 +256,7 @@ const CSV_HEADER: &[&str] = &[
 /// sampler's fit on each of its rows (empty when there is no fit; the interval columns are empty
 /// when the interval is undefined).
 pub fn write_csv(path: &std::path::Path, studies: &[Convergence]) -> Result<()> {
+    use crate::output::csv_number;
     use std::io::Write;
     crate::output::write_atomic(path, |w| {
         writeln!(w, "{}", CSV_HEADER.join(","))?;
@@ -266,9 +267,9 @@ pub fn write_csv(path: &std::path::Path, studies: &[Convergence]) -> Result<()> 
                     let (lo, hi) = f
                         .interval()
                         .map_or((String::new(), String::new()), |(lo, hi)| {
-                            (lo.to_string(), hi.to_string())
+                            (csv_number(lo), csv_number(hi))
                         });
-                    (f.slope.to_string(), lo, hi)
+                    (csv_number(f.slope), lo, hi)
                 }
                 None => (String::new(), String::new(), String::new()),
             };
@@ -282,7 +283,7 @@ pub fn write_csv(path: &std::path::Path, studies: &[Convergence]) -> Result<()> 
                     p.mse,
                     p.mse_stderr,
                     p.mean_error,
-                    p.seconds,
+                    csv_number(p.seconds),
                     p.evaluations
                 )?;
             }

@@ -6,7 +6,7 @@
 use super::expected::ExpectedSpectrum;
 use super::{frequency, Method};
 use crate::error::{Error, Result};
-use crate::output::write_atomic;
+use crate::output::{csv_number, write_atomic};
 use std::f64::consts::PI;
 use std::io::Write;
 use std::path::Path;
@@ -213,16 +213,18 @@ pub fn write_radial_csv(path: &Path, profile: &[RadialBin]) -> Result<()> {
         }
         writeln!(w)?;
         for b in profile {
-            let stderr = b.stderr.map_or(String::new(), |se| se.to_string());
-            let anisotropy = b.anisotropy_db.map_or(String::new(), |a| a.to_string());
+            let stderr = b.stderr.map_or(String::new(), csv_number);
+            let anisotropy = b.anisotropy_db.map_or(String::new(), csv_number);
             write!(
                 w,
                 "{},{},{},{stderr},{anisotropy}",
-                b.r, b.r_normalized, b.mean
+                b.r,
+                csv_number(b.r_normalized),
+                csv_number(b.mean)
             )?;
             for c in &b.cones {
                 match c {
-                    Some(v) => write!(w, ",{v}")?,
+                    Some(v) => write!(w, ",{}", csv_number(*v))?,
                     None => write!(w, ",")?,
                 }
             }

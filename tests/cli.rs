@@ -770,7 +770,7 @@ fn missing_input_files_are_input_errors() {
             o,
         ],
         &format!(
-            "{}: its image: cannot read {}",
+            "{}: its image: {}: the target image does not exist; check the 'file' key",
             image_target.display(),
             dir.path().join("no-image.npy").display()
         ),

@@ -950,10 +950,7 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
             )));
         }
         if !path.is_file() {
-            return Err(Error::Input(format!(
-                "{}: the target image does not exist; check the 'file' key (relative to the TOML file)",
-                path.display()
-            )));
+            return Err(missing_image(path));
         }
         let (top_first, shape) = crate::output::image::read_exr_channel(path).map_err(bad)?;
         (
@@ -997,11 +994,23 @@ fn read_image(path: &Path) -> Result<(Vec<f64>, [usize; 2])> {
     Ok((pixels, [rows, cols]))
 }
 
+/// The refusal of a target image file that does not exist.
+fn missing_image(path: &Path) -> Error {
+    Error::Input(format!(
+        "{}: the target image does not exist; check the 'file' key (relative to the TOML file)",
+        path.display()
+    ))
+}
+
 /// The values and `[rows, cols]` of a 2D npy array of `float64` or `float32`, in either order.
 fn read_npy_image(path: &Path, bad: &dyn Fn(String) -> Error) -> Result<(Vec<f64>, [usize; 2])> {
     // At most 1 GiB of values (2^27 float64 or 2^28 float32 pixels; an 8192 x 8192 spectrum is
     // 2^26) and the header.
-    let file = std::fs::File::open(path).map_err(|e| Error::read_input(path, e))?;
+    let file = std::fs::File::open(path).map_err(|e| match e.kind() {
+        // As for an EXR image: the fix is in the target's 'file' key.
+        std::io::ErrorKind::NotFound => missing_image(path),
+        _ => Error::read_input(path, e),
+    })?;
     let limit = (1u64 << 30) + (1 << 20);
     let size = file
         .metadata()

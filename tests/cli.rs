@@ -509,21 +509,28 @@ fn converge_csv_quotes_sheared_sampler_names() {
 fn projection_must_fit_dimensions() {
     let (_d, out) = tmp("x.npy");
     let o = out.to_str().unwrap();
-    rejects(
-        &[
-            "spectrum",
-            "--sampler",
-            "random",
-            "-n",
-            "16",
-            "--proj",
-            "xu",
-            "-o",
-            o,
-        ],
-        "--proj",
-        &out,
-    );
+    // xu does not fit 2D; -1,2 is no projection (taken for a flag by clap before, 'unexpected
+    // argument').
+    for (proj, needle) in [
+        ("xu", "--proj"),
+        ("-1,2", "--proj '-1,2' is not a projection"),
+    ] {
+        rejects(
+            &[
+                "spectrum",
+                "--sampler",
+                "random",
+                "-n",
+                "16",
+                "--proj",
+                proj,
+                "-o",
+                o,
+            ],
+            needle,
+            &out,
+        );
+    }
 }
 
 #[test]

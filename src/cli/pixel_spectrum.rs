@@ -33,7 +33,7 @@ pub struct PixelSpectrumArgs {
     pub pixel: String,
     /// Projection: two of x,y,u,v, e.g. xu or yv. The other two coordinates are averaged
     /// (see --average), which gives the k_other = 0 slice of the 4D spectrum.
-    #[arg(long, default_value = "xu")]
+    #[arg(long, default_value = "xu", allow_hyphen_values = true)]
     pub proj: String,
     /// Frequency grid size K (even, from 2 to 8192): the integrand is sampled on a K x K grid of cell
     /// centres and k1, k2 run over -K/2..K/2-1. K² · M² (with M of --average) is at most 1073741824 ray casts

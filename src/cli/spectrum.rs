@@ -40,7 +40,7 @@ pub struct SpectrumArgs {
     pub n: Option<usize>,
     /// Projection: two of x,y,u,v (xy, uv, xu, yv, ...) or two dimension indices (0,2).
     /// The first is the horizontal frequency k1, the second the vertical k2.
-    #[arg(long, default_value = "xy")]
+    #[arg(long, default_value = "xy", allow_hyphen_values = true)]
     pub proj: String,
     /// Frequency grid side K (even, at most 8192): k1, k2 run over −K/2 … K/2−1.
     #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]

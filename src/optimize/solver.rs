@@ -196,6 +196,8 @@ struct Round {
     solver_exit: bool,
 }
 
+/// One round of L-BFGS (or, with `fallback`, steepest descent) from `start_set`; L-BFGS stops when
+/// the loss changes by less than `tol × 1e-3` (absolute: the caller scales `tol` to the loss).
 fn run_round(
     problem: Problem<'_>,
     start_set: &[f64],
@@ -338,7 +340,12 @@ pub fn minimize(
                 .unwrap_or(Duration::MAX),
             recorder,
             use_fallback,
-            limits.tol,
+            // L-BFGS's stop within a round is an absolute change of the loss: scaled by the loss
+            // where it is below 1, so that a target's scale does not decide how far a round goes
+            // (a variance target with weight 1e-6, losses about 1e-8, stopped every round at once:
+            // 25 times the predicted variance of the same target with weight 5000). Losses of 1
+            // and above keep the tolerance as it was (the default tables are the same bits).
+            limits.tol * best.1.loss.abs().min(1.0),
         );
         iterations += round.iters.max(1);
         let previous = best.1.loss;

@@ -214,13 +214,7 @@ pub fn fourier_method(exact: bool, eps: f64) -> Result<crate::spectrum::Method> 
 /// name (`out/`, a folder; `out/.npy`, an extension alone), or with another extension (which would not
 /// be written), is a usage error naming the files and the fix.
 pub fn sibling_outputs(output: &Path, exts: &[&str]) -> Result<Vec<PathBuf>> {
-    if crate::output::names_no_file(output) {
-        return Err(Error::Usage(format!(
-            "-o {} has no usable file name (a folder, an extension alone, or - for standard output, which is not written to); give a path such as out/image.{}",
-            output.display(),
-            exts[0]
-        )));
-    }
+    crate::output::check_file_name(output, exts)?;
     let own = extension(output);
     let files: Vec<PathBuf> = exts
         .iter()

@@ -52,11 +52,6 @@ impl Camera {
         self.position
     }
 
-    /// Focal distance `F`, world units.
-    pub fn focus(&self) -> f64 {
-        self.focus
-    }
-
     /// Aperture side `A`, world units (0: pinhole).
     pub fn aperture(&self) -> f64 {
         self.aperture

@@ -641,6 +641,17 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             best[0].sampler
         );
         assert_eq!(row[4], format!("{:.2}×", classical / best[at_max].mse));
+        // The N at which it beats the best classical sampler at that N.
+        let wins: Vec<String> = (0..ns.len())
+            .filter(|&i| best[i].mse < best_classical(subject, i))
+            .map(|i| ns[i].to_string())
+            .collect();
+        let wins = match wins.len() {
+            0 => "none".to_string(),
+            k if k == ns.len() => "all".to_string(),
+            _ => wins.join(", "),
+        };
+        assert_eq!(row[5], wins, "{subject}: {row:?}");
     }
 
     // The tables: per integrand, the table's target, the start of its optimization at every N, and

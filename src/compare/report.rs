@@ -286,10 +286,10 @@ fn shared_label(group: &[String]) -> String {
         .join(", ")
 }
 
-/// MSE against N, one line per sampler with its fitted slope; samplers whose estimates are the same
-/// bit for bit share one line.
+/// MSE against N, one line per sampler with its fitted slope; samplers with the same estimates (see
+/// [`identical_groups`]) share one line.
 fn write_convergence_plot(path: &Path, label: &str, studies: &[&Study], r: usize) -> Result<()> {
-    // Samplers with the same estimates bit for bit would draw one line over another: one line,
+    // Samplers with the same estimates would draw one line over another: one line,
     // named after all of them.
     let groups = identical_groups(studies);
     // Each line keeps its sampler's colour of the other plots: its position among all the samplers.
@@ -533,23 +533,33 @@ fn best_classical<'a>(studies: &[&'a Study], at: usize) -> Option<&'a Study> {
         .copied()
 }
 
-/// Groups of samplers whose estimates are the same bit for bit at every N (the integrand only sees
-/// coordinates these samplers share): each group of two or more, labels in report order.
+/// Relative difference below which two samplers' MSEs (and their standard errors) count as the same
+/// number: far above the rounding of the same points reached by different float operations (e.g.
+/// tables whose x and y sit at the same stratum centres, moved by the oracle's shear: equal to
+/// 1e-12), far below any difference of two samplers that differ (their MSEs differ in the second
+/// digit at the least).
+const SAME_ESTIMATES: f64 = 1e-9;
+
+/// Whether two numbers are the same to [`SAME_ESTIMATES`] (relative).
+fn same_number(a: f64, b: f64) -> bool {
+    a == b || (a - b).abs() <= SAME_ESTIMATES * a.abs().max(b.abs())
+}
+
+/// Groups of samplers whose estimates are the same at every N, to [`SAME_ESTIMATES`] (the integrand
+/// only sees coordinates these samplers share): each group of two or more, labels in report order.
 fn identical_groups(studies: &[&Study]) -> Vec<Vec<String>> {
-    // A study's fingerprint: every point's N, MSE and standard error, as bits.
-    type Fingerprint = Vec<(usize, u64, u64)>;
-    let fingerprint = |s: &Study| -> Fingerprint {
-        s.points
-            .iter()
-            .map(|p| (p.n, p.mse.to_bits(), p.mse_stderr.to_bits()))
-            .collect()
+    let same = |a: &Study, b: &Study| {
+        a.points.len() == b.points.len()
+            && a.points.iter().zip(&b.points).all(|(p, q)| {
+                p.n == q.n && same_number(p.mse, q.mse) && same_number(p.mse_stderr, q.mse_stderr)
+            })
     };
-    let mut groups: Vec<(Fingerprint, Vec<String>)> = Vec::new();
-    for s in studies {
-        let f = fingerprint(s);
-        match groups.iter_mut().find(|(g, _)| *g == f) {
+    // Each group is named by its first member, which the others are compared with.
+    let mut groups: Vec<(&Study, Vec<String>)> = Vec::new();
+    for &s in studies {
+        match groups.iter_mut().find(|(first, _)| same(first, s)) {
             Some((_, labels)) => labels.push(s.sampler.clone()),
-            None => groups.push((f, vec![s.sampler.clone()])),
+            None => groups.push((s, vec![s.sampler.clone()])),
         }
     }
     groups
@@ -557,6 +567,20 @@ fn identical_groups(studies: &[&Study]) -> Vec<Vec<String>> {
         .map(|(_, labels)| labels)
         .filter(|l| l.len() > 1)
         .collect()
+}
+
+/// The N of the study at which `s` has a lower MSE than the best classical sampler at that N, in
+/// words: `all`, `none`, or the list.
+fn winning_ns(studies: &[&Study], s: &Study, ns: &[usize]) -> String {
+    let wins: Vec<String> = (0..ns.len())
+        .filter(|&i| best_classical(studies, i).is_some_and(|c| s.points[i].mse < c.points[i].mse))
+        .map(|i| ns[i].to_string())
+        .collect();
+    match wins.len() {
+        0 => "none".into(),
+        k if k == ns.len() => "all".into(),
+        _ => wins.join(", "),
+    }
 }
 
 /// A shear to 3 decimals, with no minus sign on a value that rounds to zero.
@@ -590,7 +614,9 @@ fn write_markdown(
              realizations, ± its standard error. **Slope** is the fitted exponent of MSE ∝ N^slope with its 95% interval; the **local slope** is the \
              exponent between the two largest N alone. \
              **Time** is the median time of one estimate on one thread (generating its set, then evaluating the \
-             integrand), in milliseconds; **set-up** is the one-off optimization of the table for that N, in seconds. A sampler that \
+             integrand), in milliseconds, taken while the realizations run on every core: it drifts with the machine's load \
+             (three runs of the default study on a shared 2-core machine gave the same sampler at N = 1024 times a median \
+             1.4× apart, up to 2.6×), so only larger differences tell samplers apart. **set-up** is the one-off optimization of the table for that N, in seconds. A sampler that \
              cannot make an N uses its nearest valid N (shown). Seed {}; measurements {:.1} s, whole run {:.1} s \
              (with the spectra gallery, whose tables at N = {} are built when missing, and the plots).\n",
             c.seed, outcome.seconds, whole_seconds, c.spectra_n
@@ -658,7 +684,9 @@ fn write_markdown(
             match files {
                 Some((conv, speed)) => writeln!(
                     w,
-                    "\n![convergence]({conv})\n![speed against error]({speed})"
+                    "\n![convergence]({conv})\n![speed against error]({speed})\n\nSpeed against error: one point per N, the \
+                     smallest N at the top left of each line (the MSE falls as N grows); a dashed line is a table's solid one with \
+                     its optimization spread over the R estimates."
                 )?,
                 None => writeln!(
                     w,
@@ -704,16 +732,17 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
     writeln!(
         w,
         "At N = {nmax}: the classical sampler with the lowest MSE, and the sampler with the lowest MSE of all \
-         (samplers that tie bit for bit are named together, the one most robust to oracle error first), its gain over that classical sampler (its MSE \
-         divided by this one's), its time per estimate and its one-off set-up, and its lowest gain when the \
-         samplers' shear (the oracle's; see Integrands) is off by {errors}, with the error where it falls (for the first named; — when it does not use \
-         the oracle). (N=…) marks a sampler that cannot make N = {nmax} and was measured at its nearest N.\n"
+         (samplers with the same estimates are named together, the one most robust to oracle error first), its gain over that classical sampler (its MSE \
+         divided by this one's), the N of this study at which it beats the best classical sampler at that N (a sampler that \
+         wins at N = {nmax} alone may lose at the N you use: see its table), its time per estimate and its one-off set-up, and its lowest gain when the \
+         samplers' shear (the oracle's; see Integrands) is off by {errors}, with the error where it falls (for the first named; — when the oracle does not move it \
+         here). (N=…) marks a sampler that cannot make N = {nmax} and was measured at its nearest N.\n"
     )?;
     writeln!(
         w,
-        "| integrand | class | best classical (MSE) | best sampler | gain | ms/estimate | set-up s | lowest gain with the oracle off |"
+        "| integrand | class | best classical (MSE) | best sampler | gain | beats the best classical at N | ms/estimate | set-up s | lowest gain with the oracle off |"
     )?;
-    writeln!(w, "|---|---|---|---|---|---|---|---|")?;
+    writeln!(w, "|---|---|---|---|---|---|---|---|---|")?;
     for subject in &outcome.subjects {
         let studies = studies_of(outcome, &subject.label);
         let (Some(classical), Some(best)) = (
@@ -728,6 +757,7 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
         let lowest_gain = |sampler: &str| {
             off_rows(outcome, &subject.label, sampler)
                 .iter()
+                .filter(|row| row.moved)
                 .map(|row| (reference / row.point.mse, row.error))
                 .filter(|(g, _)| g.is_finite())
                 .min_by(|a, b| a.0.total_cmp(&b.0))
@@ -758,7 +788,7 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
         let p = &first.points[at];
         writeln!(
             w,
-            "| {} | {} | {} ({:.3e}){} | {}{}{} | {} | {:.3} | {:.2} | {lowest} |",
+            "| {} | {} | {} ({:.3e}){} | {}{}{} | {} | {} | {:.3} | {:.2} | {lowest} |",
             subject.label,
             subject.class,
             classical.sampler,
@@ -771,6 +801,7 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
                 .map(|n| format!(" = {n}"))
                 .collect::<String>(),
             gain_text(reference, p.mse),
+            winning_ns(&studies, first, &c.ns),
             p.median_seconds * 1e3,
             first.setup_seconds[at],
         )?;
@@ -826,7 +857,7 @@ fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io:
     for group in identical_groups(&studies) {
         writeln!(
             w,
-            "\nIdentical estimates, bit for bit at every N: {}. These samplers put the same points where this \
+            "\nIdentical estimates at every N (bit for bit, or apart by rounding alone: to 9 digits): {}. These samplers put the same points where this \
              integrand looks (e.g. an oracle shear of 0 leaves a sampler as it is; with the exact shear, every \
              table's x (and y) sit at the same stratum centres, and the edge sees nothing else).",
             group.join(", ")
@@ -933,17 +964,29 @@ fn write_robustness(
             .find(|r| &r.subject == subject && &r.sampler == sampler && r.error == 0.0)
             .map_or("—".to_string(), |r| cell(r.point.mse, r.point.mse_stderr));
         let off = off_rows(outcome, subject, sampler);
+        // A table designed in an in-focus layer's frame is not moved: every error gives its MSE
+        // with the exact oracle, and there is no worst error to name.
+        let unmoved = off.first().is_some_and(|r| !r.moved);
         // The first of equal worst MSEs, as the summary's lowest gain picks it.
         let worst = off
             .iter()
             .min_by(|a, b| b.point.mse.total_cmp(&a.point.mse))
-            .map_or("—".to_string(), |r| {
-                format!(
-                    "{} at {}",
-                    cell(r.point.mse, r.point.mse_stderr),
-                    error_text(r.error)
-                )
-            });
+            .filter(|_| !unmoved)
+            .map_or(
+                if unmoved {
+                    "— (not moved by the oracle here)"
+                } else {
+                    "—"
+                }
+                .to_string(),
+                |r| {
+                    format!(
+                        "{} at {}",
+                        cell(r.point.mse, r.point.mse_stderr),
+                        error_text(r.error)
+                    )
+                },
+            );
         // The errors share their random streams, so the points are correlated and the mean gets no
         // standard error of its own.
         let mean = if off.is_empty() {
@@ -1208,5 +1251,51 @@ mod tests {
         assert_eq!(local_slope_text(&study(&[1e-3, 0.0])), "—");
         assert_eq!(local_slope_text(&study(&[0.0, 0.0])), "—");
         assert!(!drawable(0.0) && !drawable(f64::NAN) && drawable(1e-300));
+    }
+
+    fn named(sampler: &str, family: &'static str, mses: &[f64]) -> Study {
+        Study {
+            sampler: sampler.into(),
+            family,
+            ..study(mses)
+        }
+    }
+
+    /// Estimates apart by rounding alone (1e-12 relative) are one group; estimates apart in the
+    /// seventh digit are not.
+    #[test]
+    fn estimates_apart_by_rounding_alone_share_a_group() {
+        let a = named("a", "table", &[1e-3, 1e-4]);
+        let b = named("b", "table", &[1e-3 * (1.0 + 1e-12), 1e-4]);
+        let c = named("c", "table", &[1e-3 * (1.0 + 1e-6), 1e-4]);
+        assert_eq!(
+            identical_groups(&[&a, &c, &b]),
+            vec![vec!["a".to_string(), "b".to_string()]]
+        );
+        assert!(identical_groups(&[&a, &c]).is_empty());
+    }
+
+    /// The N at which a sampler beats the best classical sampler at that N: all, none, or a list.
+    #[test]
+    fn winning_ns_names_the_sizes_a_sampler_wins_at() {
+        let ns = [16, 64, 256];
+        let slow = named("slow", "classical", &[1e-2, 1e-3, 1e-4]);
+        let fast = named("fast", "classical", &[2e-2, 1e-3, 1e-5]);
+        let table = named("table", "table", &[1.5e-2, 5e-4, 1e-4]);
+        let classical = [&slow, &fast];
+        let all = [&slow, &fast, &table];
+        assert_eq!(winning_ns(&all, &table, &ns), "64");
+        assert_eq!(
+            winning_ns(&classical, &named("t", "table", &[5e-3, 5e-4, 5e-4]), &ns),
+            "16, 64"
+        );
+        assert_eq!(
+            winning_ns(&classical, &named("t", "table", &[1e-9; 3]), &ns),
+            "all"
+        );
+        assert_eq!(
+            winning_ns(&classical, &named("t", "table", &[1.0; 3]), &ns),
+            "none"
+        );
     }
 }

@@ -420,6 +420,15 @@ fn gain(a: &ConvergePoint, b: &ConvergePoint) -> (f64, f64) {
 /// break the hairlines yet, 1.23–1.55×, which is not asserted. (The band before, opening for 5 % only,
 /// gave 4.1–4.6× and 18–20× at ±20 %.)
 ///
+/// Rates, issue 6's "keeps its gain where the hairline loses it": from N = 256 to 1024 sheared
+/// padded MJ falls from its exact-oracle rate (MSE ∝ N^-2.00 ± 0.04) back to random sampling's -1
+/// at every error (-0.98 to -1.06 ± 0.04), while the table keeps -1.56 to -1.63 ± 0.05 of its
+/// -2.09 ± 0.05: 52-58 % of its rate's gain over -1, the hairline -2 to 6 %. Asserted, by more than 3
+/// combined standard errors each, at every error: the hairline's rate is shallower than with the
+/// exact oracle, the table's is steeper than the hairline's and steeper than -1. Half is what any set
+/// robust to a range of errors can keep (README, "Rates under oracle error"), so "most" is not
+/// asserted.
+///
 /// Reported, not asserted: sheared rank-1 lattices, outside the issue's list. They beat the table at
 /// nearly every N and error here. The table's gain over the lattice on the xu plane (`xuyv-lattice`) is
 /// 0.22–0.44× at N = 1024, 0.31–0.46× at 256 and 0.33–1.00× at 64; over the 4D Korobov lattice
@@ -437,6 +446,17 @@ fn widened_hairline_gains_under_oracle_error() {
     let lattices =
         ["xuyv-lattice", "lattice"].map(|s| SamplerSpec::Sheared(s.into(), ShearMode::Transported));
     let mut failures = Vec::new();
+    // The table's and sheared padded MJ's points at N = 256 and 1024, per error (0 for the exact
+    // oracle), for their local rates.
+    let mut rated: Vec<(usize, f64, ConvergePoint, ConvergePoint)> = Vec::new();
+    for n in [256, 1024] {
+        rated.push((
+            n,
+            0.0,
+            mse_over(&table, subject, n, 1.0, &tables, GAIN_REALIZATIONS),
+            mse_over(&hairlines[0], subject, n, 1.0, &tables, GAIN_REALIZATIONS),
+        ));
+    }
     for n in [64, 256, 1024] {
         let jit: Vec<ConvergePoint> = jittered
             .iter()
@@ -464,6 +484,9 @@ fn widened_hairline_gains_under_oracle_error() {
             }
             for h in &hairlines {
                 let p = mse_over(h, subject, n, 1.0 + error, &tables, GAIN_REALIZATIONS);
+                if h == &hairlines[0] && n >= 256 {
+                    rated.push((n, error, t.clone(), p.clone()));
+                }
                 let (g, se) = gain(&t, &p);
                 line += &format!(" | vs {} {g:.2}±{se:.2}", h.label());
                 // Every sheared hairline, as documented above (xuyv-mj was left out here without a
@@ -480,7 +503,62 @@ fn widened_hairline_gains_under_oracle_error() {
             eprintln!("{line}");
         }
     }
+    // Rates from N = 256 to 1024: the sheared hairline's falls back towards random sampling's -1 at
+    // every error, the widened table's stays steeper than the hairline's and than -1.
+    let rate = |error: f64, of_table: bool| {
+        let at = |n: usize| {
+            let (_, _, t, h) = rated.iter().find(|r| r.0 == n && r.1 == error).unwrap();
+            if of_table {
+                t.clone()
+            } else {
+                h.clone()
+            }
+        };
+        local_rate(&at(256), &at(1024))
+    };
+    let (t_exact, h_exact) = (rate(0.0, true), rate(0.0, false));
+    eprintln!(
+        "rate 256 -> 1024, exact oracle: table {:.2} ± {:.2}, sheared padded MJ {:.2} ± {:.2}",
+        t_exact.0, t_exact.1, h_exact.0, h_exact.1
+    );
+    for error in [-0.2, -0.05, 0.05, 0.2] {
+        let (t, h) = (rate(error, true), rate(error, false));
+        let kept = |r: (f64, f64), exact: (f64, f64)| (r.0 + 1.0) / (exact.0 + 1.0);
+        eprintln!(
+            "rate 256 -> 1024, error {error:+}: table {:.2} ± {:.2} (keeps {:.0} % of its rate's \
+             gain over -1), sheared padded MJ {:.2} ± {:.2} (keeps {:.0} %)",
+            t.0,
+            t.1,
+            100.0 * kept(t, t_exact),
+            h.0,
+            h.1,
+            100.0 * kept(h, h_exact)
+        );
+        let z = |a: (f64, f64), b: (f64, f64)| (b.0 - a.0) / a.1.hypot(b.1);
+        if z(h_exact, h) <= 3.0 {
+            failures.push(format!(
+                "error {error:+}: the sheared hairline keeps its rate"
+            ));
+        }
+        if z(t, h) <= 3.0 {
+            failures.push(format!(
+                "error {error:+}: rate not steeper than the hairline's"
+            ));
+        }
+        if z(t, (-1.0, 0.0)) <= 3.0 {
+            failures.push(format!("error {error:+}: rate not steeper than -1"));
+        }
+    }
     assert!(failures.is_empty(), "not beaten: {failures:?}");
+}
+
+/// The local rate from `a` to `b` (`MSE ∝ N^rate` between their N) and its standard error, from the
+/// MSEs' relative standard errors (first order; the two sets of realizations are independent).
+fn local_rate(a: &ConvergePoint, b: &ConvergePoint) -> (f64, f64) {
+    let steps = (b.n as f64 / a.n as f64).ln();
+    let rate = (b.mse / a.mse).ln() / steps;
+    let se = (a.mse_stderr / a.mse).hypot(b.mse_stderr / b.mse) / steps;
+    (rate, se)
 }
 
 /// Issue 5, double wedge: on the fan of edges with shears in [0.3, 0.7] (its double wedge is the
@@ -680,5 +758,5 @@ fn shipped_studies_load() {
             loaded.push(path);
         }
     }
-    assert_eq!(loaded.len(), 2, "{loaded:?}");
+    assert_eq!(loaded.len(), 3, "{loaded:?}");
 }

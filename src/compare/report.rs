@@ -4,7 +4,7 @@
 use super::config::{CompareConfig, GALLERY_SHEAR_RANGE};
 use super::tables::{framed_target, moved, start_sampler, TableCache, TABLE_ITERATIONS};
 use super::{instantiate, usable_n, Outcome, Robustness, SamplerSpec, Study, SubjectInfo};
-use crate::converge::{plot, Convergence};
+use crate::converge::{plot, ConvergePoint, Convergence};
 use crate::error::Result;
 use crate::output::plot::{write_loglog_png, LogLogPlot, Series, XScale};
 use crate::output::sheet::{write_sheet, Panel};
@@ -208,7 +208,7 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
         Ok(())
     })?;
     let shape = [outcome.subjects.len(), specs.len(), outcome.config.ns.len()];
-    let collect = |f: &dyn Fn(&super::ConvergePoint) -> f64| -> Vec<f64> {
+    let collect = |f: &dyn Fn(&ConvergePoint) -> f64| -> Vec<f64> {
         outcome
             .studies
             .iter()
@@ -533,26 +533,35 @@ fn best_classical<'a>(studies: &[&'a Study], at: usize) -> Option<&'a Study> {
         .copied()
 }
 
-/// Relative difference below which two samplers' MSEs (and their standard errors) count as the same
-/// number: far above the rounding of the same points reached by different float operations (e.g.
-/// tables whose x and y sit at the same stratum centres, moved by the oracle's shear: equal to
-/// 1e-12), far below any difference of two samplers that differ (their MSEs differ in the second
-/// digit at the least).
+/// Relative difference below which two samplers' MSEs count as the same number: far above the
+/// rounding of the same points reached by different float operations (e.g. tables whose x and y sit
+/// at the same stratum centres, moved by the oracle's shear: 1.2e-12 apart at most in the default
+/// study), far below any difference of two samplers that differ (2.5e-3 at the least there).
 const SAME_ESTIMATES: f64 = 1e-9;
 
-/// Whether two numbers are the same to [`SAME_ESTIMATES`] (relative).
+/// Whether two MSEs are the same to [`SAME_ESTIMATES`] (relative).
 fn same_number(a: f64, b: f64) -> bool {
     a == b || (a - b).abs() <= SAME_ESTIMATES * a.abs().max(b.abs())
 }
 
-/// Groups of samplers whose estimates are the same at every N, to [`SAME_ESTIMATES`] (the integrand
+/// Whether two points have the same estimates: the same N and MSE, and standard errors the same
+/// relative to the MSE (a standard error at rounding level, of realizations that all give the same
+/// error, may differ in its first digit between the same points reached by different operations).
+fn same_point(p: &ConvergePoint, q: &ConvergePoint) -> bool {
+    p.n == q.n
+        && same_number(p.mse, q.mse)
+        && (p.mse_stderr - q.mse_stderr).abs() <= SAME_ESTIMATES * p.mse.abs().max(q.mse.abs())
+}
+
+/// Groups of samplers whose estimates are the same at every N (see [`same_point`]; the integrand
 /// only sees coordinates these samplers share): each group of two or more, labels in report order.
 fn identical_groups(studies: &[&Study]) -> Vec<Vec<String>> {
     let same = |a: &Study, b: &Study| {
         a.points.len() == b.points.len()
-            && a.points.iter().zip(&b.points).all(|(p, q)| {
-                p.n == q.n && same_number(p.mse, q.mse) && same_number(p.mse_stderr, q.mse_stderr)
-            })
+            && a.points
+                .iter()
+                .zip(&b.points)
+                .all(|(p, q)| same_point(p, q))
     };
     // Each group is named by its first member, which the others are compared with.
     let mut groups: Vec<(&Study, Vec<String>)> = Vec::new();
@@ -565,15 +574,26 @@ fn identical_groups(studies: &[&Study]) -> Vec<Vec<String>> {
     groups
         .into_iter()
         .map(|(_, labels)| labels)
-        .filter(|l| l.len() > 1)
+        .filter(|labels| labels.len() > 1)
         .collect()
 }
 
-/// The N of the study at which `s` has a lower MSE than the best classical sampler at that N, in
-/// words: `all`, `none`, or the list.
+/// Combined standard errors by which a sampler's MSE must lie below the best classical one's to
+/// count as beating it in the summary.
+const BEATS_BY: f64 = 2.0;
+
+/// The N of the study at which `s` has a lower MSE than the best classical sampler at that N by more
+/// than [`BEATS_BY`] combined standard errors, in words: `all`, `none`, or the list; `—` for a
+/// classical sampler, which is not compared with itself.
 fn winning_ns(studies: &[&Study], s: &Study, ns: &[usize]) -> String {
+    if s.family == "classical" {
+        return "— (classical)".into();
+    }
+    let beats = |p: &ConvergePoint, q: &ConvergePoint| {
+        q.mse - p.mse > BEATS_BY * p.mse_stderr.hypot(q.mse_stderr)
+    };
     let wins: Vec<String> = (0..ns.len())
-        .filter(|&i| best_classical(studies, i).is_some_and(|c| s.points[i].mse < c.points[i].mse))
+        .filter(|&i| best_classical(studies, i).is_some_and(|c| beats(&s.points[i], &c.points[i])))
         .map(|i| ns[i].to_string())
         .collect();
     match wins.len() {
@@ -733,8 +753,8 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
         w,
         "At N = {nmax}: the classical sampler with the lowest MSE, and the sampler with the lowest MSE of all \
          (samplers with the same estimates are named together, the one most robust to oracle error first), its gain over that classical sampler (its MSE \
-         divided by this one's), the N of this study at which it beats the best classical sampler at that N (a sampler that \
-         wins at N = {nmax} alone may lose at the N you use: see its table), its time per estimate and its one-off set-up, and its lowest gain when the \
+         divided by this one's), the N of this study at which it beats the best classical sampler at that N by more than \
+         {BEATS_BY} standard errors (a sampler that wins at N = {nmax} alone may lose at the N you use: see its table), its time per estimate and its one-off set-up, and its lowest gain when the \
          samplers' shear (the oracle's; see Integrands) is off by {errors}, with the error where it falls (for the first named; — when the oracle does not move it \
          here). (N=…) marks a sampler that cannot make N = {nmax} and was measured at its nearest N.\n"
     )?;
@@ -1200,7 +1220,6 @@ fn write_tables(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::converge::ConvergePoint;
 
     /// A group's one legend entry names every member, the shared first word once.
     #[test]
@@ -1261,21 +1280,25 @@ mod tests {
         }
     }
 
-    /// Estimates apart by rounding alone (1e-12 relative) are one group; estimates apart in the
-    /// seventh digit are not.
+    /// Estimates apart by rounding alone (1e-12 relative) are one group, with standard errors at
+    /// rounding level that differ in their first digit; estimates apart in the seventh digit are not.
     #[test]
     fn estimates_apart_by_rounding_alone_share_a_group() {
         let a = named("a", "table", &[1e-3, 1e-4]);
-        let b = named("b", "table", &[1e-3 * (1.0 + 1e-12), 1e-4]);
+        let mut b = named("b", "table", &[1e-3 * (1.0 + 1e-12), 1e-4]);
+        b.points[0].mse_stderr = 3e-16;
         let c = named("c", "table", &[1e-3 * (1.0 + 1e-6), 1e-4]);
         assert_eq!(
             identical_groups(&[&a, &c, &b]),
             vec![vec!["a".to_string(), "b".to_string()]]
         );
         assert!(identical_groups(&[&a, &c]).is_empty());
+        b.points[0].mse_stderr = 1e-5;
+        assert!(identical_groups(&[&a, &b]).is_empty());
     }
 
-    /// The N at which a sampler beats the best classical sampler at that N: all, none, or a list.
+    /// The N at which a sampler beats the best classical sampler at that N by more than 2 standard
+    /// errors: all, none, or a list; a classical sampler is not compared with itself.
     #[test]
     fn winning_ns_names_the_sizes_a_sampler_wins_at() {
         let ns = [16, 64, 256];
@@ -1285,17 +1308,22 @@ mod tests {
         let classical = [&slow, &fast];
         let all = [&slow, &fast, &table];
         assert_eq!(winning_ns(&all, &table, &ns), "64");
+        assert_eq!(winning_ns(&all, &fast, &ns), "— (classical)");
+        let t = |mses: &[f64]| named("t", "table", mses);
         assert_eq!(
-            winning_ns(&classical, &named("t", "table", &[5e-3, 5e-4, 5e-4]), &ns),
+            winning_ns(&classical, &t(&[5e-3, 5e-4, 5e-4]), &ns),
             "16, 64"
         );
-        assert_eq!(
-            winning_ns(&classical, &named("t", "table", &[1e-9; 3]), &ns),
-            "all"
-        );
-        assert_eq!(
-            winning_ns(&classical, &named("t", "table", &[1.0; 3]), &ns),
-            "none"
-        );
+        assert_eq!(winning_ns(&classical, &t(&[1e-9; 3]), &ns), "all");
+        assert_eq!(winning_ns(&classical, &t(&[1.0; 3]), &ns), "none");
+        // 5e-4 below 1e-3 is a win with standard errors of 1e-4 each (3.5 of them), not with 2e-4.
+        let mut near = t(&[1.0, 5e-4, 1.0]);
+        let mut reference = fast.clone();
+        near.points[1].mse_stderr = 1e-4;
+        reference.points[1].mse_stderr = 1e-4;
+        assert_eq!(winning_ns(&[&reference, &near], &near, &ns), "64");
+        near.points[1].mse_stderr = 2e-4;
+        reference.points[1].mse_stderr = 2e-4;
+        assert_eq!(winning_ns(&[&reference, &near], &near, &ns), "none");
     }
 }

@@ -2263,7 +2263,7 @@ fn counts_must_be_positive_and_distinct() {
     let csv = out.with_extension("csv");
     let c = csv.to_str().unwrap();
     let exr = out.with_extension("exr");
-    let cases: [(Vec<&str>, &str, &Path); 10] = [
+    let cases: [(Vec<&str>, &str, &Path); 11] = [
         (
             vec!["sample", "--sampler", "mj", "-n", "-5", "-o", o],
             "a point count must be a positive integer (1 or more), not -5",
@@ -2353,6 +2353,21 @@ fn counts_must_be_positive_and_distinct() {
                 c,
             ],
             "-n lists 16 twice",
+            &csv,
+        ),
+        (
+            vec![
+                "converge",
+                "--sampler",
+                "mj",
+                "--integrand",
+                "disc",
+                "-n",
+                "36,9,16",
+                "-o",
+                c,
+            ],
+            "-n lists 36 before 9; list N in increasing order",
             &csv,
         ),
         (
@@ -3240,6 +3255,38 @@ fn a_gaussian_whose_width_underflows_has_a_variance_of_0() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(out.contains("variance   0.0000000000e0"), "{out}");
     assert!(!out.to_lowercase().contains("nan"), "{out}");
+}
+
+/// A prediction at rounding level names its cause: an integrand with no variance in f64 (a disc of
+/// radius 1e-300) is integrated exactly by any sampler; a lattice on a smooth Gaussian has a spectrum
+/// that is 0 wherever the integrand has energy.
+#[test]
+fn variance_at_rounding_level_names_its_cause() {
+    let predict = |sampler: &str, integrand: &str| {
+        let o = anisospec(&[
+            "variance",
+            "--sampler",
+            sampler,
+            "--integrand",
+            integrand,
+            "-n",
+            "16,64",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let out = predict("jittered", "disc:r=1e-300");
+    assert!(out.contains("no predicted slope"), "{out}");
+    assert!(
+        out.contains("the integrand has no energy to integrate"),
+        "{out}"
+    );
+    let out = predict("lattice", "gaussian:sigma=0.15");
+    assert!(out.contains("no predicted slope"), "{out}");
+    assert!(
+        out.contains("the sampler's spectrum is 0 wherever the integrand has energy"),
+        "{out}"
+    );
 }
 
 /// Samplers that integrate the integrand exactly at every N (a lattice on an edge along its strata)

@@ -73,7 +73,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         .chain(&args.plot)
         .map(PathBuf::as_path)
         .collect();
-    crate::cli::distinct_counts(&args.n)?;
+    crate::cli::increasing_counts(&args.n)?;
     crate::output::check_outputs(&outputs, &inputs)?;
     // A pixel's reference goes to the cache once computed: a file in the cache's way is refused
     // before that work.

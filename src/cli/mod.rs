@@ -131,12 +131,19 @@ pub fn parse_whole(text: &str) -> std::result::Result<usize, String> {
     parse_at_least(text, 0, "a count is a whole number, 0 or more")
 }
 
-/// Checks that a list of N (`-n 16,64,256`) names each N once: a repeat would measure the same thing
-/// twice and print it as two rows.
-pub fn distinct_counts(ns: &[usize]) -> Result<()> {
-    match crate::compare::config::first_repeat(ns) {
-        Some(n) => Err(Error::Usage(format!(
+/// Checks that a list of N (`-n 16,64,256`) names each N once, in increasing order: a repeat would
+/// measure the same thing twice and print it as two rows, and the rows, CSV and plots follow the
+/// list (an unsorted one drew its lines back and forth along N).
+pub fn increasing_counts(ns: &[usize]) -> Result<()> {
+    use crate::compare::config::{first_descent, first_repeat};
+    if let Some(n) = first_repeat(ns) {
+        return Err(Error::Usage(format!(
             "-n lists {n} twice; give each N once (e.g. -n 16,64,256)"
+        )));
+    }
+    match first_descent(ns) {
+        Some((a, b)) => Err(Error::Usage(format!(
+            "-n lists {a} before {b}; list N in increasing order (e.g. -n 16,64,256)"
         ))),
         None => Ok(()),
     }

@@ -83,7 +83,7 @@ pub struct VarianceArgs {
 
 /// Runs the prediction and prints it.
 pub fn run(args: &VarianceArgs) -> Result<()> {
-    crate::cli::distinct_counts(&args.n)?;
+    crate::cli::increasing_counts(&args.n)?;
     if let Some(out) = &args.output {
         crate::cli::require_extension(out, "-o", "csv", "the prediction as a CSV table")?;
         crate::output::check_outputs(&[out], &samplers::input_files(&args.sampler))?;
@@ -168,8 +168,14 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
             ),
         },
         None if !at_rounding.is_empty() => outln!(
-            "no predicted slope: at N = {} the predicted variance is not above what f64 rounding can put into it, so its digits are rounding, not a value: the sampler's spectrum is 0 wherever the integrand has energy (a lattice on a smooth integrand)",
-            at_rounding.join(", ")
+            "no predicted slope: at N = {} the predicted variance is not above what f64 rounding can put into it, so its digits are rounding, not a value: {}",
+            at_rounding.join(", "),
+            // Only here (a rare case) is Var(f) computed, by quadrature where it has no closed form.
+            if crate::integrands::variance_reference(f.as_ref()).value > 0.0 {
+                "the sampler's spectrum is 0 wherever the integrand has energy (a lattice on a smooth integrand)"
+            } else {
+                "the integrand has no energy to integrate (Var f = 0 in f64: it is constant, or its feature is too small for f64), so every sampler integrates it exactly"
+            }
         ),
         None => outln!(
             "no predicted slope (a log-log fit needs two or more distinct N and a positive variance at each)"

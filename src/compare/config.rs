@@ -240,6 +240,11 @@ impl CompareConfig {
                 "ns lists N = {n} twice; give each size once, e.g. ns = [16, 64, 256]"
             )));
         }
+        if let Some((a, b)) = first_descent(&self.ns) {
+            return Err(Error::Usage(format!(
+                "ns lists N = {a} before {b}; list the sizes in increasing order, e.g. ns = [16, 64, 256] (the report's columns and plots follow it)"
+            )));
+        }
         if self.oracle_errors.is_empty() {
             return Err(Error::Usage(
                 "oracle_errors is empty; the robustness study needs at least one error of the oracle's shear, e.g. oracle_errors = [-0.1, 0.1]".into(),
@@ -607,6 +612,11 @@ pub(crate) fn first_repeat<T: PartialEq>(list: &[T]) -> Option<&T> {
         .map(|(_, x)| x)
 }
 
+/// The first neighbours `(a, b)` of `list` with `b < a`: `None` for a list in increasing order.
+pub(crate) fn first_descent(list: &[usize]) -> Option<(usize, usize)> {
+    list.windows(2).find(|w| w[1] < w[0]).map(|w| (w[0], w[1]))
+}
+
 /// For a TOML error "unknown field `key`" where `key` is a key of the study itself: a hint that it
 /// stands inside an `[[analytic]]` entry (TOML puts every key after an `[[analytic]]` line into that
 /// entry, so a key appended to a printed config lands there).
@@ -752,6 +762,9 @@ mod tests {
             m.contains("table_seconds = 1e300 is not a time limit"),
             "{m}"
         );
+        let m = refused(|c| c.ns = vec![32, 9, 16]);
+        assert!(m.contains("ns lists N = 32 before 9"), "{m}");
+        assert!(m.contains("increasing order"), "{m}");
         let m = refused(|c| c.oracle_errors = vec![1e-300, 1e-300]);
         assert!(m.contains("oracle_errors lists 1e-300 twice"), "{m}");
         // Errors the report (to 0.1 %) would show as the exact oracle, or as one another.

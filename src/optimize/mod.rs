@@ -195,19 +195,24 @@ impl Setup {
     }
 }
 
+impl Strata {
+    /// The blue-noise grid of this 4D strata term on `xy` and `uv` at `n` points; its errors are the
+    /// blue-noise target's (e.g. a disc that reaches no frequency cell at a small `n`).
+    pub fn grid(&self, n: usize) -> Result<crate::targets::TargetGrid> {
+        let strata = Target::BlueNoise(BlueNoise {
+            radius: self.radius,
+            dark_weight: None,
+            falloff: None,
+        });
+        strata.validate().and_then(|()| strata.grid(n))
+    }
+}
+
 impl Setup {
     /// The blue-noise grid of the 4D strata term on `xy` and `uv`; its errors name that term and its
     /// flags, since the user gave no blue-noise target.
     fn strata_grid(&self) -> Result<crate::targets::TargetGrid> {
-        let strata = Target::BlueNoise(BlueNoise {
-            radius: self.strata.radius,
-            dark_weight: None,
-            falloff: None,
-        });
-        strata
-            .validate()
-            .and_then(|()| strata.grid(self.n))
-            .map_err(|e| match e {
+        self.strata.grid(self.n).map_err(|e| match e {
                 // A flag's problem, not a target file's: a usage error, its advice in flags.
                 Error::Usage(m) | Error::Input(m) => Error::Usage(format!(
                     "the 4D strata term (a blue-noise disc of radius --strat-radius {} on xy and uv): {}; or drop the term with --strat-weight 0",

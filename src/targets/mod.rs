@@ -173,7 +173,8 @@ pub struct BlueNoise {
 /// The image covers normalized frequencies `ν1, ν2 ∈ [−extent, extent)`: column `j` of `cols` spans
 /// `ν1 ∈ [−extent + 2·extent·j/cols, …)`, row `i` spans `ν2` likewise (row 0 lowest, the spectrum layout
 /// of DESIGN §3). Each frequency cell takes the value of the pixel holding `k / sqrt(N)`; `T = 1` outside
-/// the image. Cells with `T ≤` [`DARK_LEVEL`] are dark.
+/// the image. A power spectrum is even, so the target is made so: a cell takes the mean of the
+/// values at `k` and `−k`. Cells with `T ≤` [`DARK_LEVEL`] are dark.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Image {
@@ -794,7 +795,10 @@ impl Target {
             Target::Hairline(_) => "length (with half_width or opening) or inner_radius",
             Target::DoubleWedge(_) => "radius or inner_radius",
             Target::BlueNoise(_) => "radius",
-            _ => "extent, or darken more of the image",
+            _ => {
+                "extent, or darken more of the image (it is made symmetric, as a power spectrum is: a cell reads the mean \
+                 of the image at k and at -k, so a pixel dark where its mirror is lit is not dark)"
+            }
         };
         Error::Input(format!(
             "the {} target darkens no frequency cell at N = {n}: its dark region reaches no cell (the nearest \
@@ -1221,6 +1225,23 @@ mod tests {
             pixels,
             shape: [m, m],
         })
+    }
+
+    /// An image dark at k = (1, 0) alone is lit at its mirror (-1, 0): made even, it darkens no
+    /// cell, and the refusal says why.
+    #[test]
+    fn a_one_sided_dark_pixel_is_not_dark() {
+        let m = 32;
+        let mut pixels = vec![1.0; m * m];
+        pixels[16 * m + 17] = 0.0;
+        let e = measured_image(pixels.clone(), m)
+            .grid(256)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("darkens no frequency cell"), "{e}");
+        assert!(e.contains("made symmetric"), "{e}");
+        pixels[16 * m + 15] = 0.0;
+        assert_eq!(measured_image(pixels, m).grid(256).unwrap().dark_cells, 2);
     }
 
     /// Cells asking for P above N are found (no set reaches them); a flat image asks for none.

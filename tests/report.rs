@@ -648,18 +648,22 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             let c = &jittered[i];
             c.mse - p.mse > 2.0 * p.mse_stderr.hypot(c.mse_stderr)
         };
+        // An N the sampler replaced by its nearest valid N is marked with it.
         let wins: Vec<String> = (0..ns.len())
             .filter(|&i| beats(i))
-            .map(|i| ns[i].to_string())
+            .map(|i| match best[i].n == ns[i] {
+                true => ns[i].to_string(),
+                false => format!("{} (N={})", ns[i], best[i].n),
+            })
             .collect();
         let wins = if best[0].sampler == SAMPLERS[0].0 {
             "— (classical)".to_string()
+        } else if wins.is_empty() {
+            "none".to_string()
+        } else if wins.len() == ns.len() && (0..ns.len()).all(|i| best[i].n == ns[i]) {
+            "all".to_string()
         } else {
-            match wins.len() {
-                0 => "none".to_string(),
-                k if k == ns.len() => "all".to_string(),
-                _ => wins.join(", "),
-            }
+            wins.join(", ")
         };
         assert_eq!(row[5], wins, "{subject}: {row:?}");
     }

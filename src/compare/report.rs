@@ -583,8 +583,9 @@ fn identical_groups(studies: &[&Study]) -> Vec<Vec<String>> {
 const BEATS_BY: f64 = 2.0;
 
 /// The N of the study at which `s` has a lower MSE than the best classical sampler at that N by more
-/// than [`BEATS_BY`] combined standard errors, in words: `all`, `none`, or the list; `—` for a
-/// classical sampler, which is not compared with itself.
+/// than [`BEATS_BY`] combined standard errors, in words: `all`, `none`, or the list (an N the
+/// sampler replaced by its nearest valid N marked with it); `—` for a classical sampler, which is not
+/// compared with itself.
 fn winning_ns(studies: &[&Study], s: &Study, ns: &[usize]) -> String {
     if s.family == "classical" {
         return "— (classical)".into();
@@ -592,14 +593,22 @@ fn winning_ns(studies: &[&Study], s: &Study, ns: &[usize]) -> String {
     let beats = |p: &ConvergePoint, q: &ConvergePoint| {
         q.mse - p.mse > BEATS_BY * p.mse_stderr.hypot(q.mse_stderr)
     };
-    let wins: Vec<String> = (0..ns.len())
+    let wins: Vec<usize> = (0..ns.len())
         .filter(|&i| best_classical(studies, i).is_some_and(|c| beats(&s.points[i], &c.points[i])))
-        .map(|i| ns[i].to_string())
         .collect();
+    // A sampler measured at a substitute N is marked with it, as in its other cells.
+    let substituted = |i: usize| s.points[i].n != ns[i];
     match wins.len() {
         0 => "none".into(),
-        k if k == ns.len() => "all".into(),
-        _ => wins.join(", "),
+        k if k == ns.len() && !wins.iter().any(|&i| substituted(i)) => "all".into(),
+        _ => wins
+            .iter()
+            .map(|&i| match substituted(i) {
+                true => format!("{} (N={})", ns[i], s.points[i].n),
+                false => ns[i].to_string(),
+            })
+            .collect::<Vec<_>>()
+            .join(", "),
     }
 }
 
@@ -1325,5 +1334,12 @@ mod tests {
         near.points[1].mse_stderr = 2e-4;
         reference.points[1].mse_stderr = 2e-4;
         assert_eq!(winning_ns(&[&reference, &near], &near, &ns), "none");
+        // Measured at a substitute N (as oa at 961 for 1024): marked with it, never "all".
+        let mut substitute = t(&[1e-9; 3]);
+        substitute.points[2].n = 225;
+        assert_eq!(
+            winning_ns(&classical, &substitute, &ns),
+            "16, 64, 256 (N=225)"
+        );
     }
 }

@@ -997,25 +997,19 @@ fn write_robustness(
         // with the exact oracle, and there is no worst error to name.
         let unmoved = off.first().is_some_and(|r| !r.moved);
         // The first of equal worst MSEs, as the summary's lowest gain picks it.
-        let worst = off
-            .iter()
-            .min_by(|a, b| b.point.mse.total_cmp(&a.point.mse))
-            .filter(|_| !unmoved)
-            .map_or(
-                if unmoved {
-                    "— (not moved by the oracle here)"
-                } else {
-                    "—"
-                }
-                .to_string(),
-                |r| {
+        let worst = if unmoved {
+            "— (not moved by the oracle here)".to_string()
+        } else {
+            off.iter()
+                .min_by(|a, b| b.point.mse.total_cmp(&a.point.mse))
+                .map_or("—".to_string(), |r| {
                     format!(
                         "{} at {}",
                         cell(r.point.mse, r.point.mse_stderr),
                         error_text(r.error)
                     )
-                },
-            );
+                })
+        };
         // The errors share their random streams, so the points are correlated and the mean gets no
         // standard error of its own.
         let mean = if off.is_empty() {

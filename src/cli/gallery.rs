@@ -99,9 +99,12 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
         .map(|&s| (s, 2, Projection::XY))
         .chain(GALLERY_4D.iter().map(|&s| (s, 4, Projection::XU)))
         .collect();
-    for &(name, dims, _) in &jobs {
+    let mut built = Vec::with_capacity(jobs.len());
+    for (name, dims, proj) in jobs {
         let sampler = samplers::build(name, dims)?;
-        samplers::validate_n(sampler.as_ref(), usable_n(sampler.as_ref(), args.n))?;
+        let n = usable_n(sampler.as_ref(), args.n);
+        samplers::validate_n(sampler.as_ref(), n)?;
+        built.push((name, sampler, n, dims, proj));
     }
     crate::output::check_folder(&args.out, "--out", "gallery")?;
     let gallery = args.out.join("gallery");
@@ -118,9 +121,8 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
         let mut rows = Vec::new();
         let mut spectra = Vec::new();
         let mut dark_noted = false;
-        for &(name, dims, proj) in &jobs {
-            let sampler = samplers::build(name, dims)?;
-            let n = usable_n(sampler.as_ref(), args.n);
+        for (name, sampler, n, dims, proj) in &built {
+            let (n, dims, proj) = (*n, *dims, *proj);
             let started = std::time::Instant::now();
             let spec = of_sampler(
                 sampler.as_ref(),

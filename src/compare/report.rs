@@ -555,6 +555,8 @@ fn same_point(p: &ConvergePoint, q: &ConvergePoint) -> bool {
 
 /// Groups of samplers whose estimates are the same at every N (see [`same_point`]; the integrand
 /// only sees coordinates these samplers share): each group of two or more, labels in report order.
+/// A group is a connected component of "the same at every N", so it does not depend on the order
+/// of `studies` even where A is the same as B and B as C but A and C differ at rounding level.
 fn identical_groups(studies: &[&Study]) -> Vec<Vec<String>> {
     let same = |a: &Study, b: &Study| {
         a.points.len() == b.points.len()
@@ -563,19 +565,36 @@ fn identical_groups(studies: &[&Study]) -> Vec<Vec<String>> {
                 .zip(&b.points)
                 .all(|(p, q)| same_point(p, q))
     };
-    // Each group is named by its first member, which the others are compared with.
-    let mut groups: Vec<(&Study, Vec<String>)> = Vec::new();
-    for &s in studies {
-        match groups.iter_mut().find(|(first, _)| same(first, s)) {
-            Some((_, labels)) => labels.push(s.sampler.clone()),
-            None => groups.push((s, vec![s.sampler.clone()])),
+    let mut grouped = vec![false; studies.len()];
+    let mut groups = Vec::new();
+    for start in 0..studies.len() {
+        if grouped[start] {
+            continue;
+        }
+        grouped[start] = true;
+        let mut members = vec![start];
+        let mut next = 0;
+        while next < members.len() {
+            let i = members[next];
+            next += 1;
+            for j in 0..studies.len() {
+                if !grouped[j] && same(studies[i], studies[j]) {
+                    grouped[j] = true;
+                    members.push(j);
+                }
+            }
+        }
+        if members.len() > 1 {
+            members.sort_unstable();
+            groups.push(
+                members
+                    .iter()
+                    .map(|&i| studies[i].sampler.clone())
+                    .collect(),
+            );
         }
     }
     groups
-        .into_iter()
-        .map(|(_, labels)| labels)
-        .filter(|labels| labels.len() > 1)
-        .collect()
 }
 
 /// Combined standard errors by which a sampler's MSE must lie below the best classical one's to
@@ -1298,6 +1317,20 @@ mod tests {
         assert!(identical_groups(&[&a, &c]).is_empty());
         b.points[0].mse_stderr = 1e-5;
         assert!(identical_groups(&[&a, &b]).is_empty());
+    }
+
+    /// A chain a ≈ b ≈ c whose ends differ (by 1.6e-9 relative, past the 1e-9 of one step) is one
+    /// group in whatever order the samplers come, labels in that order.
+    #[test]
+    fn a_chain_of_same_estimates_is_one_group_in_any_order() {
+        let a = named("a", "table", &[1e-3, 1e-4]);
+        let b = named("b", "table", &[1e-3 * (1.0 + 0.8e-9), 1e-4]);
+        let c = named("c", "table", &[1e-3 * (1.0 + 1.6e-9), 1e-4]);
+        assert!(identical_groups(&[&a, &c]).is_empty());
+        let label = |s: &[&str]| vec![s.iter().map(|l| l.to_string()).collect::<Vec<_>>()];
+        assert_eq!(identical_groups(&[&a, &c, &b]), label(&["a", "c", "b"]));
+        assert_eq!(identical_groups(&[&b, &a, &c]), label(&["b", "a", "c"]));
+        assert_eq!(identical_groups(&[&c, &a, &b]), label(&["c", "a", "b"]));
     }
 
     /// The N at which a sampler beats the best classical sampler at that N by more than 2 standard

@@ -57,9 +57,14 @@ where
                 .into(),
         ));
     }
-    let bins = res * res;
     let bar = progress::bar(realizations as u64, label);
-    let mut total = PowerSums::new(res, method);
+    // Shifted by the first realization's spectrum, so that the variance does not cancel (see
+    // [`PowerSums`]); that set is drawn once more below, in its place in the sums.
+    let mut total = if realizations < 2 {
+        PowerSums::new(res, method)
+    } else {
+        PowerSums::shifted_by(res, method, &draw(0))
+    };
     let mut n = 0;
     // Batches bound the memory; their boundaries do not change the summation order (chunk by
     // chunk, in order), so their size may follow the thread count without changing the bits.
@@ -71,7 +76,7 @@ where
     // zeroed per batch: fresh vectors per chunk page-faulted on every batch (the allocator hands
     // the freed batch back to the system), ≈ 30 % of the time at K = 256.
     let mut partial: Vec<(PowerSums, usize)> = (0..realizations.div_ceil(CHUNK).min(per_batch))
-        .map(|_| (PowerSums::new(res, method), 0))
+        .map(|_| (total.zeroed_like(), 0))
         .collect();
     for start in (0..realizations).step_by(batch) {
         let end = (start + batch).min(realizations);
@@ -95,17 +100,7 @@ where
         }
     }
     bar.finish_and_clear();
-    let (sum, sum_sq) = total.into_grids();
-    let r = realizations as f64;
-    let mean: Vec<f64> = sum.iter().map(|s| s / r).collect();
-    let stderr = if realizations < 2 {
-        vec![0.0; bins]
-    } else {
-        mean.iter()
-            .zip(&sum_sq)
-            .map(|(m, s2)| ((s2 / r - m * m).max(0.0) * r / (r - 1.0) / r).sqrt())
-            .collect()
-    };
+    let (mean, stderr) = total.mean_and_stderr(realizations);
     Ok(ExpectedSpectrum {
         res,
         n,
@@ -149,4 +144,55 @@ pub fn of_sets(
     expected_spectrum(sets.sets(), res, method, "point sets", |r| {
         sets.project(r, proj)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::Rng as _;
+
+    /// A rank-1 lattice, shifted at random on the torus per realization, has the same `P` in every
+    /// realization up to rounding (`P = N` on its dual lattice): the standard error stays at the
+    /// rounding of the values themselves, as the two-pass formula over the sets gives it, where
+    /// `Σ P² − (Σ P)² / R` would leave about `sqrt(ε) N` (1.5e-8 relative) or exactly 0.
+    #[test]
+    fn a_spectrum_that_hardly_varies_has_a_rounding_level_standard_error() {
+        let (n, res, reps) = (1024, 64, 20);
+        let draw = |r: usize| {
+            let mut rng = rng::stream(91, r as u64);
+            let (sx, sy) = (rng.random::<f64>(), rng.random::<f64>());
+            (0..n)
+                .map(|i| {
+                    let x = i as f64 / n as f64;
+                    let y = ((i * 619) % n) as f64 / n as f64;
+                    [(x + sx).fract(), (y + sy).fract()]
+                })
+                .collect::<Vec<_>>()
+        };
+        for method in [Method::Exact, Method::nufft(1e-9).unwrap()] {
+            let got = expected_spectrum(reps, res, method, "lattice", draw).unwrap();
+            let spectra: Vec<Vec<f64>> = (0..reps)
+                .map(|r| super::super::power(&draw(r), res, method))
+                .collect();
+            let mut peaks = 0;
+            for bin in 0..res * res {
+                let values: Vec<f64> = spectra.iter().map(|p| p[bin]).collect();
+                let mean = values.iter().sum::<f64>() / reps as f64;
+                let var =
+                    values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (reps - 1) as f64;
+                let two_pass = (var / reps as f64).sqrt();
+                let tol = 1e-6 * two_pass + 2.0 * f64::EPSILON * mean.abs();
+                assert!(
+                    (got.stderr[bin] - two_pass).abs() <= tol,
+                    "{method:?} bin {bin}: P {mean:e}, standard error {:e}, two-pass {two_pass:e}",
+                    got.stderr[bin]
+                );
+                peaks += usize::from(mean > 0.5 * n as f64);
+            }
+            assert!(
+                peaks > 1,
+                "{method:?}: the lattice's dual points in the grid"
+            );
+        }
+    }
 }

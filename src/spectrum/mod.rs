@@ -142,22 +142,28 @@ pub fn power(points: &[[f64; 2]], res: usize, method: Method) -> Vec<f64> {
     }
 }
 
-/// Sums of `P` and `P²` over the realizations of an expected spectrum (see [`expected`]), in the
-/// layout that is cheapest for the method: the `res²` grid for the exact DFT, the half plane
-/// `k2 ≥ 0` for the NUFFT, whose `P(k) = P(−k)` is exact by construction
-/// ([`Nufft2d::accumulate_power`]: half the sums read and written per set). [`PowerSums::into_grids`]
-/// gives both on the grid, with the bits of summing [`power`]'s output set by set in the same order.
+/// Sums of `P` and of `(P − shift)²` over the realizations of an expected spectrum (see
+/// [`expected`]), in the layout that is cheapest for the method: the `res²` grid for the exact DFT,
+/// the half plane `k2 ≥ 0` for the NUFFT, whose `P(k) = P(−k)` is exact by construction
+/// ([`Nufft2d::accumulate_power`]: half the sums read and written per set). The shift, one
+/// realization's `P`, keeps the variance from cancelling where `P` varies little about a large mean
+/// (a lattice's peaks `P = N`): `Σ P² − (Σ P)² / R` would leave about `sqrt(ε) E[P]` of rounding
+/// (ε the machine epsilon) as the standard error there, or 0. [`PowerSums::mean_and_stderr`] gives
+/// both on the grid, the mean with the bits of summing [`power`]'s output set by set in the same
+/// order.
 #[derive(Clone, Debug)]
 pub struct PowerSums {
     res: usize,
     method: Method,
+    shift: Arc<Vec<f64>>,
     sum: Vec<f64>,
     sum_sq: Vec<f64>,
 }
 
 impl PowerSums {
     /// Zero sums for spectra on the `res × res` grid, in the layout of `method` (the grid, or its
-    /// half plane). An invalid `res` or `eps` panics later, in [`PowerSums::add`], as [`power`] does.
+    /// half plane), shifted by 0. An invalid `res` or `eps` panics later, in [`PowerSums::add`], as
+    /// [`power`] does.
     pub fn new(res: usize, method: Method) -> Self {
         let len = match method {
             Method::Exact => res * res,
@@ -166,47 +172,79 @@ impl PowerSums {
         PowerSums {
             res,
             method,
+            shift: Arc::new(vec![0.0; len]),
             sum: vec![0.0; len],
             sum_sq: vec![0.0; len],
         }
     }
 
-    /// Bytes the two sums hold.
+    /// Zero sums as [`PowerSums::new`], shifted by the power spectrum of `points`.
+    pub fn shifted_by(res: usize, method: Method, points: &[[f64; 2]]) -> Self {
+        let mut first = PowerSums::new(res, method);
+        first.add(points);
+        PowerSums {
+            shift: Arc::new(first.sum),
+            ..PowerSums::new(res, method)
+        }
+    }
+
+    /// Zero sums of the same grid, method and shift.
+    pub fn zeroed_like(&self) -> Self {
+        PowerSums {
+            res: self.res,
+            method: self.method,
+            shift: self.shift.clone(),
+            sum: vec![0.0; self.sum.len()],
+            sum_sq: vec![0.0; self.sum_sq.len()],
+        }
+    }
+
+    /// Bytes the two sums hold (the shift is shared).
     pub fn bytes(&self) -> usize {
         (self.sum.len() + self.sum_sq.len()) * std::mem::size_of::<f64>()
     }
 
-    /// Sets both sums back to zero, keeping their memory.
+    /// Sets both sums back to zero, keeping their memory and the shift.
     pub fn clear(&mut self) {
         self.sum.fill(0.0);
         self.sum_sq.fill(0.0);
     }
 
-    /// Adds the power spectrum of `points` (that of [`power`], bit for bit) and its square.
+    /// Adds the power spectrum `P` of `points` (that of [`power`], bit for bit) and `(P − shift)²`.
     pub fn add(&mut self, points: &[[f64; 2]]) {
         match self.method {
             Method::Exact => {
                 let p = power(points, self.res, self.method);
-                for ((s, q), p) in self.sum.iter_mut().zip(&mut self.sum_sq).zip(p) {
+                for (((s, q), c), p) in self
+                    .sum
+                    .iter_mut()
+                    .zip(&mut self.sum_sq)
+                    .zip(self.shift.iter())
+                    .zip(p)
+                {
+                    let d = p - c;
                     *s += p;
-                    *q += p * p;
+                    *q += d * d;
                 }
             }
             Method::Nufft { eps } => plan_or_panic(self.res, eps).accumulate_power(
                 points,
+                &self.shift,
                 &mut self.sum,
                 &mut self.sum_sq,
             ),
         }
     }
 
-    /// Adds another set of sums of the same grid and method, entry by entry.
+    /// Adds another set of sums of the same grid, method and shift, entry by entry.
     ///
-    /// Panics if `other` has another grid or method.
+    /// Panics if `other` has another grid, method or shift.
     pub fn add_sums(&mut self, other: &PowerSums) {
         assert!(
-            self.res == other.res && self.method == other.method,
-            "PowerSums of different grids or methods cannot be added"
+            self.res == other.res
+                && self.method == other.method
+                && Arc::ptr_eq(&self.shift, &other.shift),
+            "PowerSums of different grids, methods or shifts cannot be added"
         );
         self.sum
             .iter_mut()
@@ -218,13 +256,31 @@ impl PowerSums {
             .for_each(|(a, b)| *a += b);
     }
 
-    /// The sums of `P` and of `P²` on the `res × res` grid (layout of this module).
-    pub fn into_grids(self) -> (Vec<f64>, Vec<f64>) {
+    /// The mean `Σ P / R` over `realizations` = R sets and its standard error `sqrt(s² / R)`, with
+    /// the unbiased sample variance `s² = (Σ (P − c)² − (Σ P − R c)² / R) / (R − 1)` about the
+    /// shift `c`, both on the `res × res` grid (layout of this module). The standard error is 0 for
+    /// `R < 2`, where it is unknown.
+    pub fn mean_and_stderr(self, realizations: usize) -> (Vec<f64>, Vec<f64>) {
+        let r = realizations as f64;
+        let mean: Vec<f64> = self.sum.iter().map(|s| s / r).collect();
+        let stderr: Vec<f64> = if realizations < 2 {
+            vec![0.0; self.sum.len()]
+        } else {
+            self.sum
+                .iter()
+                .zip(&self.sum_sq)
+                .zip(self.shift.iter())
+                .map(|((s, q), c)| {
+                    let off = s - r * c;
+                    ((q - off * off / r).max(0.0) / (r - 1.0) / r).sqrt()
+                })
+                .collect()
+        };
         match self.method {
-            Method::Exact => (self.sum, self.sum_sq),
+            Method::Exact => (mean, stderr),
             Method::Nufft { .. } => (
-                nufft::expand_half_plane(&self.sum, self.res),
-                nufft::expand_half_plane(&self.sum_sq, self.res),
+                nufft::expand_half_plane(&mean, self.res),
+                nufft::expand_half_plane(&stderr, self.res),
             ),
         }
     }

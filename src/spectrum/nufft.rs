@@ -391,30 +391,46 @@ impl Nufft2d {
         self.power_on(self.pick(points.len()), points)
     }
 
-    /// Adds the power spectrum of `points` to `sum` and its square to `sum_sq`, both held as the half
-    /// plane `k2 ≥ 0` ([`half_plane_len`] values each; layout of [`expand_half_plane`]), for sums over
-    /// realizations (see [`crate::spectrum::expected`]). `P(k) = P(−k)`, so the half plane holds the
-    /// whole spectrum, and expanded it gives, bit for bit, the sums of [`Nufft2d::power`]'s output.
-    /// Each run of `P` goes into the sums while it is in cache, and only half the spectrum is read
-    /// and written per set. An empty set adds nothing (`P = 0`).
+    /// Adds the power spectrum `P` of `points` to `sum` and `(P − shift)²` to `sum_sq`, all three held
+    /// as the half plane `k2 ≥ 0` ([`half_plane_len`] values each; layout of [`expand_half_plane`]),
+    /// for sums over realizations (see [`crate::spectrum::PowerSums`]: a shift near the mean keeps
+    /// the variance from cancelling). `P(k) = P(−k)`, so the half plane holds the whole spectrum,
+    /// and expanded, `sum` gives, bit for bit, the sums of [`Nufft2d::power`]'s output. Each run of
+    /// `P` goes into the sums while it is in cache, and only half the spectrum is read and written
+    /// per set. An empty set has `P = 0`.
     ///
-    /// Panics if `sum` or `sum_sq` does not hold [`half_plane_len`] values.
-    pub fn accumulate_power(&self, points: &[[f64; 2]], sum: &mut [f64], sum_sq: &mut [f64]) {
+    /// Panics if `shift`, `sum` or `sum_sq` does not hold [`half_plane_len`] values.
+    pub fn accumulate_power(
+        &self,
+        points: &[[f64; 2]],
+        shift: &[f64],
+        sum: &mut [f64],
+        sum_sq: &mut [f64],
+    ) {
         let k = self.res;
         let len = half_plane_len(k);
         assert!(
-            sum.len() == len && sum_sq.len() == len,
-            "accumulate_power needs half-plane sums of (K/2 + 1)(K + 1) = {len} values"
+            shift.len() == len && sum.len() == len && sum_sq.len() == len,
+            "accumulate_power needs half-plane shift and sums of (K/2 + 1)(K + 1) = {len} values"
         );
         if points.is_empty() {
+            for (q, c) in sum_sq.iter_mut().zip(shift) {
+                *q += c * c;
+            }
             return;
         }
         let grid = self.pick(points.len());
         grid.power_runs(points, 1.0 / points.len() as f64, |a, p| {
             let run = a * (k + 1)..(a + 1) * (k + 1);
-            for ((s, q), p) in sum[run.clone()].iter_mut().zip(&mut sum_sq[run]).zip(p) {
+            for (((s, q), c), p) in sum[run.clone()]
+                .iter_mut()
+                .zip(&mut sum_sq[run.clone()])
+                .zip(&shift[run])
+                .zip(p)
+            {
+                let d = p - c;
                 *s += p;
-                *q += p * p;
+                *q += d * d;
             }
         });
     }
@@ -1226,8 +1242,8 @@ mod tests {
 
     #[test]
     fn accumulated_power_has_the_bits_of_power() {
-        // Half-plane sums of P and P² over sets (one empty), expanded, against the sums of `power`'s
-        // output, bit for bit.
+        // Half-plane sums of P and (P − shift)² over sets (one empty), expanded, against the sums of
+        // `power`'s output, bit for bit.
         let mut rng = crate::rng::stream(55, 0);
         let sets: Vec<Vec<[f64; 2]>> = [150, 0, 90]
             .iter()
@@ -1241,12 +1257,15 @@ mod tests {
             let plan = Nufft2d::new(res, 1e-6).unwrap();
             let len = half_plane_len(res);
             let (mut sum, mut sum_sq) = (vec![0.0; len], vec![0.0; len]);
+            let shift: Vec<f64> = (0..len).map(|i| 0.5 + i as f64).collect();
+            let shift_grid = expand_half_plane(&shift, res);
             let (mut want, mut want_sq) = (vec![0.0; res * res], vec![0.0; res * res]);
             for pts in &sets {
-                plan.accumulate_power(pts, &mut sum, &mut sum_sq);
-                for ((s, q), p) in want.iter_mut().zip(&mut want_sq).zip(plan.power(pts)) {
+                plan.accumulate_power(pts, &shift, &mut sum, &mut sum_sq);
+                let p = plan.power(pts);
+                for (((s, q), c), p) in want.iter_mut().zip(&mut want_sq).zip(&shift_grid).zip(p) {
                     *s += p;
-                    *q += p * p;
+                    *q += (p - c) * (p - c);
                 }
             }
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();

@@ -205,6 +205,56 @@ fn bad_resolution_is_rejected() {
     );
 }
 
+/// The scene file a pixel integrand names (`pixel:...,scene=FILE`) is an input too: converge's CSV or
+/// plot, or variance's CSV, of that name is refused with exit 2 and the scene left as it was.
+#[test]
+fn a_pixel_scene_file_is_never_an_output() {
+    let (dir, csv) = tmp("scene.csv");
+    std::fs::write(&csv, "aperture = 0.05\n").unwrap();
+    let png = dir.path().join("scene.png");
+    std::fs::write(&png, "aperture = 0.05\n").unwrap();
+    for scene in [&csv, &png] {
+        let s = scene.to_str().unwrap();
+        let pixel = format!("pixel:px=20,py=20,scene={s},refcount=64");
+        let out_flag = if scene == &csv { "-o" } else { "--plot" };
+        for args in [
+            vec![
+                "converge",
+                "--sampler",
+                "sobol",
+                "--integrand",
+                &pixel,
+                "-n",
+                "16",
+                "--realizations",
+                "2",
+                out_flag,
+                s,
+            ],
+            vec![
+                "variance",
+                "--sampler",
+                "sobol",
+                "--integrand",
+                &pixel,
+                "-n",
+                "16",
+                "-o",
+                s,
+            ],
+        ] {
+            if args[0] == "variance" && scene == &png {
+                continue;
+            }
+            let o = anisospec(&args);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+            assert!(err.contains("is the input file"), "{args:?}: {err}");
+            assert_eq!(std::fs::read_to_string(scene).unwrap(), "aperture = 0.05\n");
+        }
+    }
+}
+
 /// Outputs are checked against every input and against each other before any work: a table used as a
 /// sampler or as the optimizer's start, two outputs with one name, a file where a folder must go.
 #[test]

@@ -66,6 +66,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         .sampler
         .iter()
         .flat_map(|name| crate::samplers::input_files(name.trim()))
+        .chain(crate::integrands::spec::input_files(&args.integrand))
         .collect();
     let outputs: Vec<&std::path::Path> = args
         .output

@@ -86,7 +86,9 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
     crate::cli::increasing_counts(&args.n)?;
     if let Some(out) = &args.output {
         crate::cli::require_extension(out, "-o", "csv", "the prediction as a CSV table")?;
-        crate::output::check_outputs(&[out], &samplers::input_files(&args.sampler))?;
+        let mut inputs = samplers::input_files(&args.sampler);
+        inputs.extend(crate::integrands::spec::input_files(&args.integrand));
+        crate::output::check_outputs(&[out], &inputs)?;
     }
     let f = parse(&args.integrand)?;
     let sampler = sampler_with_shear(&args.sampler, f.dims(), &args.shear)?;

@@ -11,6 +11,7 @@ use super::shapes::{Disc, Fan, Gaussian, HalfPlane};
 use super::Integrand;
 use crate::error::{Error, Result};
 use crate::points::Projection;
+use std::path::PathBuf;
 use std::sync::Arc;
 
 /// The `key=value` parameters of one atom, checked against its family's keys.
@@ -144,6 +145,19 @@ const PIXEL_STANDS_ALONE: &str =
 /// rendered reference with a standard error rather than a closed form.
 pub fn names_a_pixel(spec: &str) -> bool {
     spec.trim().starts_with("pixel:")
+}
+
+/// The files an integrand `spec` reads: the scene file of a pixel (`pixel:...,scene=FILE`), else
+/// none. Commands refuse an output that is one of them (outputs never clobber inputs).
+pub fn input_files(spec: &str) -> Vec<PathBuf> {
+    spec.trim()
+        .strip_prefix("pixel:")
+        .into_iter()
+        .flat_map(|body| body.split(','))
+        .filter_map(|kv| kv.split_once('='))
+        .filter(|(k, _)| k.trim() == "scene")
+        .map(|(_, v)| PathBuf::from(v.trim()))
+        .collect()
 }
 
 /// The family called `name`.

@@ -317,6 +317,54 @@ fn a_prediction_at_rounding_level_gets_no_slope_or_interval() {
     assert_eq!(lattice.fit.unwrap().interval(), None, "{lattice:?}");
 }
 
+/// A narrow Gaussian (sigma = 0.02) puts energy on the whole grid, so the prediction sums the
+/// full-grid NUFFT: a lattice's cones that miss its dual points are 0 (exact sums: about 1e-35),
+/// and at a loose eps the NUFFT's error there (about 1e-22 at eps = 1e-3) must not pass for a
+/// share with a slope (before, "cone 0 slope −3.103 ± 0.585"): every cone and N the exact sums
+/// find at rounding level is within its error bound under the NUFFT, and a cone without a fit
+/// there has none under the NUFFT, at eps = 1e-3 and 1e-6.
+#[test]
+fn a_cone_within_the_nufft_error_gets_no_slope() {
+    let f = parse("gaussian:sigma=0.02").unwrap();
+    let ns = [1024, 4096, 16384];
+    let vc = |method| VarianceConfig {
+        res: 64,
+        res_per_n: None,
+        realizations: 20,
+        cones: 4,
+        seed: 1,
+        method,
+    };
+    let lattice = sampler("lattice", 2);
+    let exact = predict(lattice.as_ref(), f.as_ref(), &ns, &vc(Method::Exact)).unwrap();
+    let zero: Vec<usize> = (0..4).filter(|&c| exact.cone_fits[c].is_none()).collect();
+    assert!(!zero.is_empty(), "the lattice misses some cones: {exact:?}");
+    for eps in [1e-3, 1e-6] {
+        let fast = predict(
+            lattice.as_ref(),
+            f.as_ref(),
+            &ns,
+            &vc(Method::nufft(eps).unwrap()),
+        )
+        .unwrap();
+        for (e, p) in exact.points.iter().zip(&fast.points) {
+            for c in (0..4).filter(|&c| e.cones[c] <= e.cone_rounding[c]) {
+                assert!(
+                    p.cones[c] <= p.cone_rounding[c],
+                    "eps {eps:e}, N {}, cone {c}: {fast:?}",
+                    p.n
+                );
+            }
+        }
+        for &c in &zero {
+            assert!(
+                fast.cone_fits[c].is_none(),
+                "eps {eps:e}, cone {c}: {fast:?}"
+            );
+        }
+    }
+}
+
 #[test]
 fn prediction_meets_measurement_in_4d_on_two_planes() {
     // Two sheared Gaussians in xu and yv: the prediction sums the xu and yv spectra of the 4D sets.

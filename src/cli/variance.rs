@@ -156,8 +156,19 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
         .points
         .iter()
         .filter(|p| p.is_rounding())
-        .map(|p| format!("{} (rounding bound {:.1e})", p.n, p.rounding))
+        .map(|p| format!("{} (error bound {:.1e})", p.n, p.rounding))
         .collect();
+    // With the NUFFT the bound holds its error at --eps; with --exact, f64 rounding's alone.
+    let (bound, zero_spectrum) = match method {
+        crate::spectrum::Method::Nufft { .. } => (
+            "what f64 rounding and the NUFFT's error at --eps can put into it",
+            "the sampler's spectrum is 0, or below the NUFFT's error at --eps, wherever the integrand has energy (a lattice on a smooth integrand); --exact or a smaller --eps tells the two apart",
+        ),
+        crate::spectrum::Method::Exact => (
+            "what f64 rounding can put into it",
+            "the sampler's spectrum is 0 wherever the integrand has energy (a lattice on a smooth integrand)",
+        ),
+    };
     match &pred.fit {
         Some(fit) => match fit.interval() {
             Some((lo, hi)) => outln!(
@@ -170,11 +181,11 @@ pub fn run(args: &VarianceArgs) -> Result<()> {
             ),
         },
         None if !at_rounding.is_empty() => outln!(
-            "no predicted slope: at N = {} the predicted variance is not above what f64 rounding can put into it, so its digits are rounding, not a value: {}",
+            "no predicted slope: at N = {} the predicted variance is not above {bound}, so its digits are not a value: {}",
             at_rounding.join(", "),
             // Only here (a rare case) is Var(f) computed, by quadrature where it has no closed form.
             if crate::integrands::variance_reference(f.as_ref()).value > 0.0 {
-                "the sampler's spectrum is 0 wherever the integrand has energy (a lattice on a smooth integrand)"
+                zero_spectrum
             } else {
                 "the integrand has no energy to integrate (Var f = 0 in f64: it is constant, or its feature is too small for f64), so every sampler integrates it exactly"
             }

@@ -155,10 +155,33 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
                 fit.chi2(s.points.len())
                     .map_or_else(|| "—".to_string(), |c| format!("{c:.2}"))
             ),
-            None => outln!(
-                "{}: no slope (a log-log fit needs two or more distinct N and a positive MSE at each)",
-                s.sampler
-            ),
+            None => {
+                let rounding: Vec<String> = s
+                    .points
+                    .iter()
+                    .filter(|p| {
+                        p.mse > 0.0
+                            && crate::converge::error_within_rounding(p.n, p.mse, reference.value)
+                    })
+                    .map(|p| {
+                        let bound = crate::converge::rounding_error(p.n, reference.value, p.mse.sqrt());
+                        format!("{} (RMS error {:.1e}, rounding up to {bound:.1e})", p.n, p.mse.sqrt())
+                    })
+                    .collect();
+                if rounding.is_empty() {
+                    outln!(
+                        "{}: no slope (a log-log fit needs two or more distinct N and a positive MSE at each)",
+                        s.sampler
+                    )
+                } else {
+                    outln!(
+                        "{}: no slope: at N = {} the error is within what f64 rounding of each estimate can make, so the MSE there is rounding, not a value (the sampler integrates {} to f64 precision)",
+                        s.sampler,
+                        rounding.join(", "),
+                        f.name()
+                    )
+                }
+            }
         }
         outln!(
             "{:>8} {:>12} {:>10} {:>12}",
@@ -193,6 +216,23 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
                 png.display(),
                 f.name()
             );
+        }
+        for s in studies.iter().filter(|_| drawable) {
+            let zero: Vec<String> = s
+                .points
+                .iter()
+                .filter(|p| p.mse == 0.0)
+                .map(|p| p.n.to_string())
+                .collect();
+            if !zero.is_empty() {
+                eprintln!(
+                    "{}: {} has MSE 0 at N = {} (it integrates {} exactly there), which a log axis cannot show: not drawn, and its line breaks there",
+                    png.display(),
+                    s.sampler,
+                    zero.join(", "),
+                    f.name()
+                );
+            }
         }
         drawable
     });

@@ -191,15 +191,22 @@ pub fn converge(
     })
 }
 
-/// `MSE ∝ N^slope` fitted through measured points (`None` with fewer than two N or a zero MSE), each
-/// point's standard error weighed against its [`rounding_floor`] for `realizations` per point and the
-/// integral `integral`. A repeated N counts once (its first point): a sampler held at its largest N
-/// by several requested N repeats one measurement, which must not narrow the fit's interval.
+/// `MSE ∝ N^slope` fitted through measured points (`None` with fewer than two N, a zero MSE, or an
+/// MSE that is rounding ([`error_within_rounding`]) at some N), each point's standard error weighed
+/// against its [`rounding_floor`] for `realizations` per point and the integral `integral`. A
+/// repeated N counts once (its first point): a sampler held at its largest N by several requested N
+/// repeats one measurement, which must not narrow the fit's interval.
 pub fn fit_points(
     points: &[ConvergePoint],
     realizations: usize,
     integral: f64,
 ) -> Option<SlopeFit> {
+    if points
+        .iter()
+        .any(|p| p.mse > 0.0 && error_within_rounding(p.n, p.mse, integral))
+    {
+        return None;
+    }
     let mut seen = std::collections::HashSet::new();
     let distinct: Vec<&ConvergePoint> = points.iter().filter(|p| seen.insert(p.n)).collect();
     let n: Vec<f64> = distinct.iter().map(|p| p.n as f64).collect();
@@ -210,6 +217,24 @@ pub fn fit_points(
         .map(|p| rounding_floor(p.n, realizations, p.mse, integral))
         .collect();
     fit_power_law(&n, &v, &se, &floor).ok()
+}
+
+/// The error that f64 rounding of an estimate `Î = Σ f_j / N` at `n` points can make on its own,
+/// against the integral `integral` (`I`), for an error `e` of the estimate: `(N + 1) u (|I| + |e|)`
+/// (summation, division and the samples, as in [`rounding_floor`]) and `u |e|` for `Î − I`.
+pub fn rounding_error(n: usize, integral: f64, error: f64) -> f64 {
+    const U: f64 = f64::EPSILON / 2.0;
+    let e = error.abs();
+    U * ((n as f64 + 1.0) * (integral.abs() + e) + e)
+}
+
+/// Whether a point's root-mean-square error `sqrt(mse)` at `n` points is within what f64 rounding
+/// of each estimate can make ([`rounding_error`]): its MSE is then rounding, not a value, and a slope
+/// through it would be rounding's (e.g. a lattice on a smooth periodic integrand: 6e-31 against an
+/// integral of 6.3).
+pub fn error_within_rounding(n: usize, mse: f64, integral: f64) -> bool {
+    let e = mse.sqrt();
+    e <= rounding_error(n, integral, e)
 }
 
 /// The relative standard error (`mse_stderr / mse`) that f64 rounding alone can give a point of
@@ -384,6 +409,20 @@ mod tests {
             median_seconds: 0.0,
             evaluations: 100 * n as u64,
         }
+    }
+
+    /// A lattice on a smooth Gaussian (integral 6.28) has MSEs of 6.3e-31 and 2.1e-30 at N = 16 and
+    /// 64, errors of 8e-16 and 1.5e-15 that rounding of the estimates alone can make (up to 1.2e-14
+    /// and 4.5e-14): no slope through them (before, "slope 0.877"). MSEs of 1e-20 and 1e-24 (errors
+    /// of 1e-10 and 1e-12) are values, and fitted.
+    #[test]
+    fn an_mse_at_rounding_level_gets_no_slope() {
+        let integral = std::f64::consts::TAU;
+        assert!(error_within_rounding(16, 6.3e-31, integral));
+        assert!(fit_points(&[point(16, 6.3e-31), point(64, 2.1e-30)], 10, integral).is_none());
+        assert!(!error_within_rounding(64, 1e-24, integral));
+        let fit = fit_points(&[point(16, 1e-20), point(64, 1e-24)], 10, integral).unwrap();
+        assert!((fit.slope + 4.0 / 4f64.log10()).abs() < 1e-9, "{fit:?}");
     }
 
     #[test]

@@ -15,7 +15,8 @@ use std::sync::Once;
 pub struct Series {
     /// Legend text, e.g. `jittered: slope -1.51, 95% CI [-1.55, -1.47]`.
     pub label: String,
-    /// `(x, y)` points: `y` positive, and `x` too on a log axis (points that are not are skipped).
+    /// `(x, y)` points: `y` positive, and `x` too on a log axis (points that are not are skipped,
+    /// and the line is broken there).
     pub points: Vec<(f64, f64)>,
     /// Optional symmetric error bars (`y ± e`), one per point.
     pub errors: Option<Vec<f64>>,
@@ -746,15 +747,22 @@ where
     for (i, s) in plot.series.iter().enumerate() {
         let (colour, marker, marker_style) = series_style(s, i);
         let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| keep(p)).collect();
+        // A point the axes cannot show (an MSE of 0) breaks the line: no segment passes over it as
+        // if the values between its neighbours had been measured.
+        let runs = s.points.split(|p| !keep(p)).filter(|run| !run.is_empty());
         let style = colour.stroke_width(2);
         if s.dashed {
-            chart
-                .draw_series(DashedLineSeries::new(pts.clone(), 8, 6, style))
-                .map_err(|e| plot_error(path, e))?;
+            for run in runs {
+                chart
+                    .draw_series(DashedLineSeries::new(run.to_vec(), 8, 6, style))
+                    .map_err(|e| plot_error(path, e))?;
+            }
         } else {
-            chart
-                .draw_series(LineSeries::new(pts.clone(), style))
-                .map_err(|e| plot_error(path, e))?;
+            for run in runs {
+                chart
+                    .draw_series(LineSeries::new(run.to_vec(), style))
+                    .map_err(|e| plot_error(path, e))?;
+            }
             let area = chart.plotting_area();
             for &p in &pts {
                 draw_marker(area, p, marker, marker_style).map_err(|e| plot_error(path, e))?;

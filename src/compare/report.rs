@@ -260,14 +260,21 @@ fn local_slope_text(s: &Study) -> String {
     }
 }
 
-/// The gain `reference / mse` of a sampler over the best classical one, as `1.23×`; `—` when it is
-/// not a finite number (no classical reference, or an MSE of 0).
+/// The gain `reference / mse` of a sampler over the best classical one, as `1.23×`, with two
+/// significant digits below 1 (`0.0034×`); `—` when it is not a finite number (no classical
+/// reference, or an MSE of 0).
 fn gain_text(reference: f64, mse: f64) -> String {
     let gain = reference / mse;
-    if gain.is_finite() {
-        format!("{gain:.2}×")
-    } else {
+    if !gain.is_finite() {
         "—".into()
+    } else if gain >= 1.0 {
+        format!("{gain:.2}×")
+    } else if gain > 0.0 {
+        // Below 1, two significant digits: 0.0034×, not 0.00×.
+        let decimals = (1.0 - gain.log10().floor()).max(2.0) as usize;
+        format!("{gain:.decimals$}×")
+    } else {
+        "0×".into()
     }
 }
 
@@ -780,7 +787,7 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
     writeln!(
         w,
         "At N = {nmax}: the classical sampler with the lowest MSE, and the sampler with the lowest MSE of all \
-         (samplers with the same estimates are named together, the one most robust to oracle error first), its gain over that classical sampler (its MSE \
+         (samplers with the same estimates are named together, the one most robust to oracle error first), the other samplers whose MSE at N = {nmax} is within {BEATS_BY} combined standard errors of it (not told apart from it by this study), its gain over that classical sampler (its MSE \
          divided by this one's), the N of this study at which it beats the best classical sampler at that N by more than \
          {BEATS_BY} standard errors (a sampler that wins at N = {nmax} alone may lose at the N you use: see its table), its time per estimate and its one-off set-up, and its lowest gain when the \
          samplers' shear (the oracle's; see Integrands) is off by {errors}, with the error where it falls (for the first named; — when the oracle does not move it \
@@ -788,9 +795,9 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
     )?;
     writeln!(
         w,
-        "| integrand | class | best classical (MSE) | best sampler | gain | beats the best classical at N | ms/estimate | set-up s | lowest gain with the oracle off |"
+        "| integrand | class | best classical (MSE) | best sampler | within {BEATS_BY} standard errors of it | gain | beats the best classical at N | ms/estimate | set-up s | lowest gain with the oracle off |"
     )?;
-    writeln!(w, "|---|---|---|---|---|---|---|---|---|")?;
+    writeln!(w, "|---|---|---|---|---|---|---|---|---|---|")?;
     for subject in &outcome.subjects {
         let studies = studies_of(outcome, &subject.label);
         let (Some(classical), Some(best)) = (
@@ -834,9 +841,23 @@ fn write_summary(w: &mut impl Write, outcome: &Outcome) -> std::io::Result<()> {
             .find(|s| s.sampler == tied[0].0)
             .expect("a tied sampler is a study of this subject");
         let p = &first.points[at];
+        let close: Vec<String> = studies
+            .iter()
+            .filter(|s| !names.contains(&s.sampler.as_str()))
+            .filter(|s| {
+                let q = &s.points[at];
+                (q.mse - p.mse).abs() <= BEATS_BY * p.mse_stderr.hypot(q.mse_stderr)
+            })
+            .map(|s| format!("{}{}", s.sampler, other_n(s.points[at].n, nmax)))
+            .collect();
+        let close = if close.is_empty() {
+            "—".to_string()
+        } else {
+            close.join(", ")
+        };
         writeln!(
             w,
-            "| {} | {} | {} ({:.3e}){} | {}{}{} | {} | {} | {:.3} | {:.2} | {lowest} |",
+            "| {} | {} | {} ({:.3e}){} | {}{}{} | {close} | {} | {} | {:.3} | {:.2} | {lowest} |",
             subject.label,
             subject.class,
             classical.sampler,
@@ -1286,6 +1307,9 @@ mod tests {
     #[test]
     fn an_mse_of_zero_prints_no_infinite_gain_or_slope() {
         assert_eq!(gain_text(2e-6, 1e-6), "2.00×");
+        assert_eq!(gain_text(2.372e-7, 7.057e-5), "0.0034×");
+        assert_eq!(gain_text(4.916e-6, 5.981e-5), "0.082×");
+        assert_eq!(gain_text(0.5e-6, 1e-6), "0.50×");
         assert_eq!(gain_text(2e-6, 0.0), "—");
         assert_eq!(gain_text(0.0, 0.0), "—");
         assert_eq!(local_slope_text(&study(&[1e-3, 1e-4])), "-1.66");

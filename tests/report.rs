@@ -182,6 +182,8 @@ struct Point {
     class: String,
     /// The integral the errors are measured against.
     integral: f64,
+    /// Its standard error: 0 for an analytic integral, a pixel reference's own.
+    integral_stderr: f64,
     sampler: String,
     n: usize,
     mse: f64,
@@ -305,6 +307,7 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             subject: r["subject"].clone(),
             class: r["class"].clone(),
             integral: num(r, "integral"),
+            integral_stderr: num(r, "integral_stderr"),
             sampler: r["sampler"].clone(),
             n: r["n"].parse().unwrap(),
             mse: num(r, "mse"),
@@ -349,6 +352,13 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             "sampler": SAMPLERS.iter().map(|s| s.0).collect::<Vec<_>>(),
             "n": ns,
             "realizations": REALIZATIONS,
+            "spectra": {
+                "axes": ["projection", "k2 + K/2", "k1 + K/2"],
+                "projection": ["xy", "uv", "xu", "yv"],
+                "K": SPECTRA_RES,
+                "n": SPECTRA_N,
+                "realizations": 2,
+            },
         })
     );
     assert_eq!(subjects[0], (EDGE.to_string(), "analytic".to_string()));
@@ -359,8 +369,10 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
     for p in &points {
         if p.subject == EDGE {
             assert_eq!(p.integral, edge.reference().value, "{p:?}");
+            assert_eq!(p.integral_stderr, 0.0, "{p:?}");
         } else {
             assert!(p.integral.is_finite() && p.integral > 0.0, "{p:?}");
+            assert!(p.integral_stderr > 0.0, "{p:?}");
         }
     }
     assert_eq!(points.len(), subjects.len() * SAMPLERS.len() * ns.len());
@@ -404,13 +416,17 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
     // The arrays [integrand, sampler, N] hold the CSV's numbers bit for bit (the CSV prints the
     // shortest text that reads back as the same f64).
     let shape = [subjects.len(), SAMPLERS.len(), ns.len()].map(|s| s as u64);
-    let columns: [(&str, Vec<f64>); 4] = [
+    let columns: [(&str, Vec<f64>); 5] = [
         ("mse", points.iter().map(|p| p.mse).collect()),
         ("mse_stderr", points.iter().map(|p| p.mse_stderr).collect()),
         ("n", points.iter().map(|p| p.n as f64).collect()),
         (
             "seconds_per_estimate",
             points.iter().map(|p| p.seconds_per_estimate).collect(),
+        ),
+        (
+            "setup_seconds",
+            points.iter().map(|p| p.setup_seconds).collect(),
         ),
     ];
     for (name, column) in columns {

@@ -43,13 +43,14 @@ pub fn slug(label: &str) -> String {
 }
 
 /// The report's files named the same in every study (besides [`REPORT_MARKER`]'s and the manifest).
-const NUMBER_FILES: [&str; 7] = [
+const NUMBER_FILES: [&str; 8] = [
     "convergence.csv",
     "robustness.csv",
     "mse.npy",
     "mse_stderr.npy",
     "n.npy",
     "seconds_per_estimate.npy",
+    "setup_seconds.npy",
     "axes.json",
 ];
 
@@ -151,15 +152,15 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
     write_atomic(&out.join("convergence.csv"), |w| {
         writeln!(
             w,
-            "subject,class,integral,sampler,family,n,realizations,mse,mse_stderr,seconds_per_estimate,setup_seconds,slope,slope_ci_low,slope_ci_high"
+            "subject,class,integral,integral_stderr,sampler,family,n,realizations,mse,mse_stderr,seconds_per_estimate,setup_seconds,slope,slope_ci_low,slope_ci_high"
         )?;
         for s in &outcome.studies {
-            let integral = outcome
+            let subject = outcome
                 .subjects
                 .iter()
                 .find(|i| i.label == s.subject)
-                .expect("every study's subject is in the outcome")
-                .integral;
+                .expect("every study's subject is in the outcome");
+            let (integral, integral_stderr) = (subject.integral, subject.integral_stderr);
             let (slope, lo, hi) =
                 s.fit
                     .map_or((String::new(), String::new(), String::new()), |f| {
@@ -171,10 +172,11 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
             for (p, setup) in s.points.iter().zip(&s.setup_seconds) {
                 writeln!(
                     w,
-                    "\"{}\",{},{},\"{}\",{},{},{r},{},{},{},{},{slope},{lo},{hi}",
+                    "\"{}\",{},{},{},\"{}\",{},{},{r},{},{},{},{},{slope},{lo},{hi}",
                     s.subject,
                     s.class,
                     csv_number(integral),
+                    csv_number(integral_stderr),
                     s.sampler,
                     s.family,
                     p.n,
@@ -222,13 +224,27 @@ fn write_numbers(outcome: &Outcome, specs: &[SamplerSpec], out: &Path) -> Result
         &collect(&|p| p.mse_stderr),
     )?;
     write_npy(&out.join("n.npy"), &shape, &collect(&|p| p.n as f64))?;
-    // What each index of the arrays' axes stands for, so that they load labelled.
+    let setup: Vec<f64> = outcome
+        .studies
+        .iter()
+        .flat_map(|s| s.setup_seconds.iter().copied())
+        .collect();
+    write_npy(&out.join("setup_seconds.npy"), &shape, &setup)?;
+    // What each index of the arrays' axes stands for, so that they load labelled; and the spectra's.
+    let k = outcome.config.spectra_res;
     let axes = serde_json::json!({
         "axes": ["integrand", "sampler", "n"],
         "integrand": outcome.subjects.iter().map(|s| &s.label).collect::<Vec<_>>(),
         "sampler": specs.iter().map(|s| s.label()).collect::<Vec<_>>(),
         "n": outcome.config.ns,
         "realizations": r,
+        "spectra": {
+            "axes": ["projection", "k2 + K/2", "k1 + K/2"],
+            "projection": ["xy", "uv", "xu", "yv"],
+            "K": k,
+            "n": outcome.config.spectra_n,
+            "realizations": outcome.config.spectra_realizations,
+        },
     });
     write_atomic(&out.join("axes.json"), |w| writeln!(w, "{axes:#}"))?;
     write_npy(
@@ -670,8 +686,9 @@ fn write_markdown(
              exponent between the two largest N alone. \
              **Time** is the median time of one estimate on one thread (generating its set, then evaluating the \
              integrand), in milliseconds, taken while the realizations run on every core: it drifts with the machine's load \
-             (three runs of the default study on a shared 2-core machine gave the same sampler at N = 1024 times a median \
-             1.4× apart, up to 2.6×), so only larger differences tell samplers apart. **set-up** is the one-off optimization of the table for that N, in seconds. A sampler that \
+             (two runs of the default study on a loaded 2-core machine gave the same sampler at N = 1024 times a median \
+             1.2× apart, up to 1.6×), so only larger differences tell samplers apart. **set-up** is the one-off optimization of the table for that N, in seconds \
+             of wall time with every core working (see Tables). A sampler that \
              cannot make an N uses its nearest valid N (shown). Seed {}; measurements {:.1} s, whole run {:.1} s \
              (with the spectra gallery, whose tables at N = {} are built when missing, and the plots).\n",
             c.seed, outcome.seconds, whole_seconds, c.spectra_n
@@ -766,9 +783,10 @@ fn write_markdown(
         writeln!(
             w,
             "`convergence.csv` and `robustness.csv` hold every measured number above (gains and local slopes are ratios of them); `mse.npy`, `mse_stderr.npy`, `n.npy` and \
-             `seconds_per_estimate.npy` are arrays [integrand, sampler, N] in the order of the tables, \
+             `seconds_per_estimate.npy` and `setup_seconds.npy` are arrays [integrand, sampler, N] in the order of the tables, \
              whose labels `axes.json` lists (N there is the study's; `n.npy` holds the N each sampler made); \
-             `spectra/*.npy` are [projection (xy, uv, xu, yv), K, K]. `{}` lists the files of this \
+             `spectra/*.npy` are [projection (xy, uv, xu, yv), k2 + K/2, k1 + K/2], so that k = 0 is at index K/2, \
+             where P = N (also in `axes.json`). `{}` lists the files of this \
              report: the next report written to this folder removes those it does not write again, \
              and nothing else.",
             crate::output::MANIFEST
@@ -923,12 +941,32 @@ fn write_subject(w: &mut impl Write, outcome: &Outcome, label: &str) -> std::io:
             classical.sampler
         )?;
     }
+    let unsheared = outcome
+        .subjects
+        .iter()
+        .any(|s| s.label == label && s.shear == (0.0, 0.0));
     for group in identical_groups(&studies) {
+        // Why these samplers agree, from what they are: the reasons that apply to this group.
+        let family_of = |l: &String| studies.iter().find(|s| &s.sampler == l).map(|s| s.family);
+        let has = |f: &str| group.iter().any(|l| family_of(l) == Some(f));
+        let mut reasons = Vec::new();
+        if has("sheared") && unsheared {
+            reasons.push("the samplers' shear of 0 leaves a sheared sampler as it is");
+        }
+        if has("optimized") {
+            reasons.push(
+                "every table holds x (and y) at the same stratum centres, and where the integrand sees nothing else of them (the exact shear) they give the same estimates",
+            );
+        }
+        let why = if reasons.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", reasons.join("; "))
+        };
         writeln!(
             w,
             "\nIdentical estimates at every N (bit for bit, or apart by rounding alone: to 9 digits): {}. These samplers put the same points where this \
-             integrand looks (e.g. an oracle shear of 0 leaves a sampler as it is; with the exact shear, every \
-             table's x (and y) sit at the same stratum centres, and the edge sees nothing else).",
+             integrand looks{why}.",
             group.join(", ")
         )?;
     }
@@ -944,13 +982,25 @@ pub(super) fn error_text(e: f64) -> String {
     format!("{:+}%", (e * 1000.0).round() / 10.0)
 }
 
-/// The config's oracle errors in words: each one when there are few, else their count and range.
+/// The config's oracle errors in words: each one when there are few, else their count and range,
+/// with their step when they (and 0, the exact shear, which the sweep leaves out) are evenly spaced.
 fn errors_text(errors: &[f64]) -> String {
     let mut sorted = errors.to_vec();
     sorted.sort_by(f64::total_cmp);
+    let mut with_exact = sorted.clone();
+    if !with_exact.contains(&0.0) {
+        with_exact.push(0.0);
+        with_exact.sort_by(f64::total_cmp);
+    }
+    let steps: Vec<f64> = with_exact.windows(2).map(|w| w[1] - w[0]).collect();
+    let even = steps
+        .first()
+        .filter(|&&d| d > 0.0 && steps.iter().all(|s| (s - d).abs() <= 1e-9))
+        .map(|&d| format!(" in steps of {}%", (d * 1000.0).round() / 10.0))
+        .unwrap_or_default();
     match (sorted.first(), sorted.last()) {
         (Some(lo), Some(hi)) if sorted.len() > 6 => format!(
-            "any of {} errors from {} to {}",
+            "any of {} errors from {} to {}{even}",
             sorted.len(),
             error_text(*lo),
             error_text(*hi)
@@ -1000,7 +1050,10 @@ fn write_robustness(
          the mean MSE over the sweep (the errors share their random streams, so it has no standard error of its own). The plots below show every error. A rank-1 lattice has P = N on its dual lattice, so \
          at some errors the erred edge's spectrum meets a dual point near the origin: a narrow spike that only a fine sweep \
          finds. Tables keep the shape built for the true shear range; a table for a range that holds an in-focus layer is \
-         designed in that layer's frame and not sheared, so the error does not move it.\n",
+         designed in that layer's frame and not sheared, so the error does not move it. The sweep covers the samplers \
+         moved by the seam-free shear (transported sheared samplers and tables; the wrap-around shear is left out) on \
+         integrands whose shear is not 0: an in-focus pixel, which no error of a shear of 0 moves, has no rows. For an \
+         analytic integrand the oracle is its configured shear, and the error is that shear's.\n",
         c.ns.get(at).unwrap_or(&0),
         errors_text(&c.oracle_errors)
     )?;
@@ -1188,15 +1241,18 @@ fn write_tables(
         w,
         "Each optimized sampler is a table of {} sets per N, built from the target file ({TABLE_ITERATIONS} \
          iterations from the start named, x and y held at the centres of its strata) and cached; each estimate \
-         uses one set with a random toroidal shift. A shape table is built for one integrand's shear range: for \
-         a range that holds 0 it is designed in the frame of the in-focus layer and not moved; for any other \
-         it is designed around the range's centre and moved by the samplers' shear (seam-free; see Integrands). A variance table is built once, for the integrand family \
-         and shear its file names, and moved by each integrand's samplers' shear; with `design = \"lattice\"` its \
+         uses one set with a random toroidal shift. A shape table is designed in a frame set by the integrand's \
+         shear range: for a range that holds 0, the in-focus layer's, and the table is not moved; for any other, the \
+         range's centre, and the table is moved by the samplers' shear (seam-free; see Integrands). A hairline band \
+         is the same in every frame (unsheared), so one table serves every integrand; a double wedge spans the \
+         range less the frame's shear, so each range has its own table under the one name. A variance table is \
+         built once, for the integrand family and shear its file names, and moved by each integrand's samplers' \
+         shear (by (0.000, 0.000), i.e. left as it is, on an in-focus pixel); with `design = \"lattice\"` its \
          sets are the rank-1 lattice of lowest predicted variance, found by a search instead of the optimizer; \
          with `design = \"lattice-mixture\"` they are rank-1 lattices in the proportions whose worst predicted \
          variance over the oracle's errors is lowest (a linear program). \
-         Set-up is the optimization (or search) time recorded when the table was built, also when it is read \
-         back from the cache; a search's includes the whole computation of the spectra it searches over, which \
+         Set-up is the optimization (or search) time recorded when the table was built (wall time, with every \
+         core working), also when it is read back from the cache; a search's includes the whole computation of the spectra it searches over, which \
          one run computes once for every N.\n",
         c.table_sets
     )?;
@@ -1341,6 +1397,22 @@ mod tests {
         assert!(identical_groups(&[&a, &c]).is_empty());
         b.points[0].mse_stderr = 1e-5;
         assert!(identical_groups(&[&a, &b]).is_empty());
+    }
+
+    /// Many errors read as their count, range and step (0, the exact shear, counted in the step).
+    #[test]
+    fn oracle_errors_in_words() {
+        let sweep: Vec<f64> = (-10..=10)
+            .filter(|&i| i != 0)
+            .map(|i| f64::from(i) * 0.025)
+            .collect();
+        assert_eq!(
+            errors_text(&sweep),
+            "any of 20 errors from -25% to +25% in steps of 2.5%"
+        );
+        let uneven = [-0.25, -0.2, -0.1, -0.05, 0.05, 0.1, 0.25];
+        assert_eq!(errors_text(&uneven), "any of 7 errors from -25% to +25%");
+        assert_eq!(errors_text(&[-0.1, 0.1]), "-10%, +10%");
     }
 
     /// A chain a ≈ b ≈ c whose ends differ (by 1.6e-9 relative, past the 1e-9 of one step) is one

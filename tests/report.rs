@@ -706,6 +706,23 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
 
     // The tables: per integrand, the table's target, the start of its optimization at every N, and
     // its set-up at every N as in the CSV.
+    // What each sampler is: a row per sampler in the tables' order, with its family and a line
+    // from the sampler catalogue (padded-jittered: Cook padding of jittered sets).
+    let glossary = &section("Samplers").rows;
+    assert_eq!(glossary.len(), 1 + SAMPLERS.len(), "{glossary:?}");
+    for (row, (sampler, family)) in glossary[1..].iter().zip(SAMPLERS) {
+        assert_eq!((row[0].as_str(), row[1].as_str()), (sampler, family));
+    }
+    assert!(
+        glossary[1][2].starts_with("Cook padding: 2D sets of jittered"),
+        "{glossary:?}"
+    );
+    assert!(glossary[2][2].contains("seam-free"), "{glossary:?}");
+    assert!(
+        glossary[3][2].contains("targets/hairline.toml"),
+        "{glossary:?}"
+    );
+
     let tables = &section("Tables").rows;
     assert_eq!(tables.len(), 1 + subjects.len(), "{tables:?}");
     for (row, (subject, _)) in tables[1..].iter().zip(&subjects) {

@@ -9,6 +9,7 @@ use crate::error::Result;
 use crate::output::plot::{write_loglog_png, LogLogPlot, Series, XScale};
 use crate::output::sheet::{write_sheet, Panel};
 use crate::output::{csv_number, write_atomic, write_npy, ReportMarker};
+use crate::points::shear::ShearMode;
 use crate::points::Projection;
 use crate::spectrum::expected::of_sampler;
 use crate::spectrum::Method;
@@ -751,6 +752,7 @@ fn write_markdown(
                 shear_text(shear.1),
             )?;
         }
+        write_samplers(w, specs)?;
         for (SubjectInfo { label, .. }, files) in outcome.subjects.iter().zip(plots) {
             write_subject(w, outcome, label)?;
             match files {
@@ -792,6 +794,34 @@ fn write_markdown(
             crate::output::MANIFEST
         )
     })
+}
+
+/// What each sampler of the study is, a line each, in the order of the tables.
+fn write_samplers(w: &mut impl Write, specs: &[SamplerSpec]) -> std::io::Result<()> {
+    writeln!(w, "\n## Samplers\n")?;
+    writeln!(w, "| sampler | family | what it is |")?;
+    writeln!(w, "|---|---|---|")?;
+    for spec in specs {
+        let what = match spec {
+            SamplerSpec::Classical(name) => {
+                crate::samplers::summary(name).unwrap_or_else(|| name.clone())
+            }
+            SamplerSpec::Sheared(name, ShearMode::Transported) => format!(
+                "{name} moved by the samplers' shear seam-free (transported): the sheared coordinate x + s·u is drawn \
+                 through its marginal, so the pattern's stratification lies along the integrand's sheared axis, with no seam"
+            ),
+            SamplerSpec::Sheared(name, ShearMode::Wrap) => format!(
+                "{name} moved by the samplers' shear with wrap-around (x moved by s·u, mod 1): the pattern keeps its \
+                 structure, but the wrap's seam is a discontinuity of its own on an integrand that is not periodic in x"
+            ),
+            SamplerSpec::Table(path) => format!(
+                "sets optimized for the target `{}` (see Tables), one at random per estimate",
+                path.display()
+            ),
+        };
+        writeln!(w, "| {} | {} | {what} |", spec.label(), spec.family())?;
+    }
+    Ok(())
 }
 
 /// The answer first: per integrand, at the largest N, the best classical sampler and the sampler with

@@ -237,6 +237,24 @@ pub fn catalog() -> Vec<SamplerInfo> {
     ]
 }
 
+/// One line on what the sampler `name` is: its [`catalog`] summary; for `padded-NAME` and
+/// `xuyv-NAME`, the family's with `NAME`'s own. `None` for a name the catalog does not hold
+/// (`table:` and `lattice:` sets, whose summaries depend on the file or vector).
+pub fn summary(name: &str) -> Option<String> {
+    let entries = catalog();
+    let of = |n: &str| entries.iter().find(|e| e.name == n).map(|e| e.summary);
+    for (prefix, family) in [("padded-", "padded-NAME"), ("xuyv-", "xuyv-NAME")] {
+        if let Some(inner) = name.strip_prefix(prefix) {
+            return Some(format!(
+                "{}; {inner}: {}",
+                of(family)?.replace("NAME", inner),
+                of(inner)?
+            ));
+        }
+    }
+    of(name).map(String::from)
+}
+
 /// A 2D sampler by name.
 fn build_2d(name: &str) -> Option<Box<dyn Sampler>> {
     Some(match name {

@@ -138,10 +138,28 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             // Through two N the line fits exactly: no degree of freedom is left to measure the scatter
             // (chi2/dof), and the interval holds only the two points' own errors, not a curvature.
             // A standard error within rounding defines no weight: no interval.
-            Some(fit) if fit.interval().is_none() => outln!(
-                "{}: slope {:.3} (95% CI —, chi2/dof —: at one or more N the realizations differ by no more than f64 rounding (stderr about 0 there), as for an estimator with the same error for every shift or a few realizations that happen to agree; no interval. If the set is random, raise --realizations)",
-                s.sampler, fit.slope
-            ),
+            Some(fit) if fit.interval().is_none() => {
+                let flat: Vec<String> = s
+                    .points
+                    .iter()
+                    .filter(|p| {
+                        p.mse_stderr / p.mse
+                            <= crate::converge::rounding_floor(
+                                p.n,
+                                args.realizations,
+                                p.mse,
+                                reference.value,
+                            )
+                    })
+                    .map(|p| p.n.to_string())
+                    .collect();
+                outln!(
+                    "{}: slope {:.3} (95% CI —, chi2/dof —: at N = {} the realizations differ by no more than f64 rounding (stderr about 0 there), as for an estimator with the same error in every realization (every shift, or an integrand with two values whose error is the same either way, at N = 1) or a few realizations that happen to agree; no interval. If the set is random, raise --realizations, or leave those N out)",
+                    s.sampler,
+                    fit.slope,
+                    flat.join(", ")
+                )
+            }
             Some(fit) if s.points.len() == 2 => outln!(
                 "{}: slope {:.3} (95% CI {:.3} .. {:.3} from the two points' errors alone, chi2/dof —: give three or more N to test the fit)",
                 s.sampler, fit.slope, fit.ci95.0, fit.ci95.1

@@ -92,8 +92,12 @@ pub fn oracle_pixel(scene: &Scene, px: usize, py: usize) -> PixelOracle {
     } else {
         0.0
     };
-    let mut s_min = s;
-    let mut s_max = s;
+    // An escaping ray has no depth: it takes no part in the range (the centre's 0 neither).
+    let (mut s_min, mut s_max) = if depth.is_finite() {
+        (s, s)
+    } else {
+        (f64::INFINITY, f64::NEG_INFINITY)
+    };
     let at = |i: usize| PROBE_INSET + (1.0 - 2.0 * PROBE_INSET) * i as f64 / (PROBES - 1) as f64;
     for i in 0..PROBES.pow(4) {
         let p = [
@@ -108,6 +112,10 @@ pub fn oracle_pixel(scene: &Scene, px: usize, py: usize) -> PixelOracle {
             s_min = s_min.min(sz);
             s_max = s_max.max(sz);
         }
+    }
+    if s_min > s_max {
+        // No ray met the room: the centre's shear of 0 stands for the pixel.
+        (s_min, s_max) = (s, s);
     }
     let class = if s_min.abs().max(s_max.abs()) <= IN_FOCUS {
         PixelClass::InFocus

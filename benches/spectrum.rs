@@ -134,6 +134,13 @@
 //! 370–708× and 346–792×). This host's exact DFT ran faster against the NUFFT than on the machine
 //! above (795×): the ratio moves with the host as much as with the code.
 //!
+//! Shifted sums of squares (same Zen 3 host, 2026-12-01, idle but for the measurement): the library
+//! now sums `(P − P₁)²` about the first realization's spectrum instead of `P²`, so that a bin's
+//! variance does not cancel (one more array read per bin while the run is in cache). Criterion's
+//! median for `library_N4096_K256_R100_eps1e-6_1thread`, the old and new code alternated four times:
+//! 89.2, 98.3, 105.1, 97.3 ms before; 97.6, 104.2, 105.3, 96.3 ms after. No difference beyond the
+//! host's drift.
+//!
 //! What 1000× would take (operation counts per realization at eps = 1e-6: σ = 1.25, n = 320,
 //! w = 14, kernel polynomials of degree 10). Spreading: 2 × 14 × 10 fused multiply-adds per point
 //! for the kernel values and 14 × 14 for the grid, 4096 × 476 × 2 ≈ 3.9 Mflop. FFTs: 289 complex

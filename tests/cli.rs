@@ -1303,6 +1303,36 @@ fn gallery_writes_every_sampler() {
     for sheet in ["sheet_2d_xy.png", "sheet_4d_xu.png"] {
         assert!(gallery.join(sheet).exists(), "{sheet}");
     }
+    // A file of yours where the next gallery writes one (not in the earlier gallery's manifest) is
+    // refused before any spectrum is computed, and kept.
+    let mine = gallery.join("2d_random_xy_radial.csv");
+    std::fs::write(&mine, "mine").unwrap();
+    let manifest = gallery.join("manifest.txt");
+    let listed = std::fs::read_to_string(&manifest).unwrap();
+    let unlisted: String = listed
+        .lines()
+        .filter(|l| !l.ends_with("2d_random_xy_radial.csv"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert_ne!(unlisted, listed, "the manifest lists the radial CSV");
+    std::fs::write(&manifest, unlisted).unwrap();
+    let o = anisospec(&[
+        "gallery",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "-n",
+        "64",
+        "--res",
+        "16",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("2d_random_xy_radial.csv"), "{err}");
+    assert!(
+        !err.contains(": N = "),
+        "spectra computed before the check: {err}"
+    );
+    assert_eq!(std::fs::read_to_string(&mine).unwrap(), "mine");
 }
 
 /// `gallery --out` on a file (or under one) is a usage error naming the flag, before any work.
@@ -2943,6 +2973,41 @@ fn two_d_tables_refuse_the_strata_flags() {
         (
             vec!["--strat-radius", "0.2", "--strat-weight", "3"],
             "--strat-radius and --strat-weight set the 4D loss",
+        ),
+    ] {
+        let mut args = vec![
+            "optimize",
+            "--target",
+            "targets/blue-noise.toml",
+            "-n",
+            "16",
+        ];
+        args.extend(flags);
+        args.extend(["-o", o]);
+        rejects(&args, needle, &out);
+    }
+}
+
+/// A radius for a loss term that its weight switches off would be ignored: it is refused by name.
+#[test]
+fn a_radius_without_its_term_is_refused() {
+    let (_dir, out) = tmp("t.npy");
+    let o = out.to_str().unwrap();
+    for (flags, needle) in [
+        (
+            vec!["--repulsion-radius", "0.5", "--repulsion-weight", "0"],
+            "--repulsion-radius has no effect with --repulsion-weight 0",
+        ),
+        (
+            vec![
+                "--dims",
+                "4",
+                "--strat-radius",
+                "0.2",
+                "--strat-weight",
+                "0",
+            ],
+            "--strat-radius has no effect with --strat-weight 0",
         ),
     ] {
         let mut args = vec![

@@ -116,6 +116,24 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
         "move that file, or give --out another folder",
     )?;
     crate::output::check_report_folder(&gallery, GALLERY_MARKER)?;
+    // Every file the gallery writes, checked before any spectrum is computed: one of yours where it
+    // goes stops the run now, not after the work.
+    let stem_of =
+        |name: &str, dims: usize, proj: Projection| format!("{dims}d_{name}_{}", proj.name());
+    let places: Vec<(PathBuf, bool)> = built
+        .iter()
+        .flat_map(|(name, _, _, dims, proj)| {
+            let stem = stem_of(name, *dims, *proj);
+            ["png", "npy"]
+                .map(|ext| format!("{stem}.{ext}"))
+                .into_iter()
+                .chain([format!("{stem}_radial.csv")])
+        })
+        .chain(SHEETS.map(|(_, file, _)| file.to_string()))
+        .chain([GALLERY_MARKER.file.to_string()])
+        .map(|file| (PathBuf::from(file), false))
+        .collect();
+    crate::output::check_report_places(&gallery, GALLERY_MARKER, &places)?;
     // The whole gallery or nothing: a failure leaves an earlier one as it was.
     write_folder(&gallery, GALLERY_MARKER, |dir| {
         let mut rows = Vec::new();
@@ -133,7 +151,7 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
                 args.seed,
                 method,
             )?;
-            let stem = format!("{dims}d_{name}_{}", proj.name());
+            let stem = stem_of(name, dims, proj);
             let outputs = [
                 dir.join(format!("{stem}.png")),
                 dir.join(format!("{stem}.npy")),

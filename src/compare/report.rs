@@ -1238,7 +1238,7 @@ fn write_robustness_plot(path: &Path, outcome: &Outcome, label: &str) -> Result<
                 shear_text(shear.0),
                 shear_text(shear.1)
             ),
-            y_label: "MSE (squared integrand units; bars: ±1 standard error)".into(),
+            y_label: "MSE (squared integrand units; bars: ±1 standard error, within the marker where shorter)".into(),
             series,
             width: 1000,
             height: 700,

@@ -361,7 +361,7 @@ pub fn plot(
         &LogLogPlot {
             title: title.to_string(),
             x_label: "N (samples per estimate)".into(),
-            y_label: "MSE (squared integrand units; bars: ±1 standard error)".into(),
+            y_label: "MSE (squared integrand units; bars: ±1 standard error, within the marker where shorter)".into(),
             series,
             width: 1000,
             height: 700,

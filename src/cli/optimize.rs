@@ -142,28 +142,6 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
         )));
     }
     crate::cli::fourier_method(args.exact, args.eps)?;
-    // A radius for a term switched off by its weight would be ignored: say so instead.
-    for (radius_given, weight, radius_flag, weight_flag) in [
-        (
-            args.repulsion_radius != DEFAULT_REPULSION.radius,
-            args.repulsion_weight,
-            "--repulsion-radius",
-            "--repulsion-weight",
-        ),
-        (
-            // A 2D table's strata flags are refused below, by name.
-            args.dims == 4 && args.strat_radius != DEFAULT_STRATA.radius,
-            args.strat_weight,
-            "--strat-radius",
-            "--strat-weight",
-        ),
-    ] {
-        if radius_given && weight == 0.0 {
-            return Err(Error::Usage(format!(
-                "{radius_flag} has no effect with {weight_flag} 0, which switches its term off; leave {radius_flag} out, or give {weight_flag} above 0"
-            )));
-        }
-    }
     if args.dims == 2 {
         let given: Vec<String> = [
             (args.strat_radius != DEFAULT_STRATA.radius, "--strat-radius"),
@@ -179,6 +157,33 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
                 super::spoken_list(&given, "and"),
                 if given.len() == 1 { "s" } else { "" },
                 if given.len() == 1 { "it" } else { "them" }
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a loss term's radius given with the weight 0 that switches the term off: it would be
+/// ignored.
+fn refuse_radius_without_term(args: &OptimizeArgs) -> Result<()> {
+    for (radius_given, weight, radius_flag, weight_flag) in [
+        (
+            args.repulsion_radius != DEFAULT_REPULSION.radius,
+            args.repulsion_weight,
+            "--repulsion-radius",
+            "--repulsion-weight",
+        ),
+        (
+            // A 2D table's strata flags are refused by name in `check_args`.
+            args.dims == 4 && args.strat_radius != DEFAULT_STRATA.radius,
+            args.strat_weight,
+            "--strat-radius",
+            "--strat-weight",
+        ),
+    ] {
+        if radius_given && weight == 0.0 {
+            return Err(Error::Usage(format!(
+                "{radius_flag} has no effect with {weight_flag} 0, which switches its term off; leave {radius_flag} out, or give {weight_flag} above 0"
             )));
         }
     }
@@ -246,6 +251,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     if lattice_search {
         refuse_solver_flags(args)?;
     }
+    refuse_radius_without_term(args)?;
     // The table at -o as given (`t.NPY` stays `t.NPY`), the other files beside it.
     let outputs: Vec<PathBuf> = std::iter::once(args.output.clone())
         .chain(

@@ -59,11 +59,15 @@ where
     }
     let bar = progress::bar(realizations as u64, label);
     // Shifted by the first realization's spectrum, so that the variance does not cancel (see
-    // [`PowerSums`]); that set is drawn once more below, in its place in the sums.
-    let mut total = if realizations < 2 {
-        PowerSums::new(res, method)
+    // [`PowerSums`]); that spectrum then takes its place in the sums as it is, not computed again.
+    let (mut total, first_len) = if realizations < 2 {
+        (PowerSums::new(res, method), None)
     } else {
-        PowerSums::shifted_by(res, method, &draw(0))
+        let first = draw(0);
+        (
+            PowerSums::shifted_by(res, method, &first),
+            Some(first.len()),
+        )
     };
     let mut n = 0;
     // Batches bound the memory; their boundaries do not change the summation order (chunk by
@@ -88,9 +92,17 @@ where
                 sums.clear();
                 let c0 = start + c * CHUNK;
                 for r in c0..(c0 + CHUNK).min(end) {
-                    let pts = draw(r);
-                    *count = pts.len();
-                    sums.add(&pts);
+                    match first_len {
+                        Some(len) if r == 0 => {
+                            *count = len;
+                            sums.add_shift();
+                        }
+                        _ => {
+                            let pts = draw(r);
+                            *count = pts.len();
+                            sums.add(&pts);
+                        }
+                    }
                     bar.inc(1);
                 }
             });

@@ -180,11 +180,21 @@ impl PowerSums {
 
     /// Zero sums as [`PowerSums::new`], shifted by the power spectrum of `points`.
     pub fn shifted_by(res: usize, method: Method, points: &[[f64; 2]]) -> Self {
-        let mut first = PowerSums::new(res, method);
-        first.add(points);
-        PowerSums {
-            shift: Arc::new(first.sum),
-            ..PowerSums::new(res, method)
+        let mut sums = PowerSums::new(res, method);
+        sums.add(points);
+        sums.shift = Arc::new(std::mem::replace(
+            &mut sums.sum,
+            vec![0.0; sums.sum_sq.len()],
+        ));
+        sums.sum_sq.fill(0.0);
+        sums
+    }
+
+    /// Adds the spectrum the shift was taken from, as [`PowerSums::add`] of its points would, bit
+    /// for bit (`P` is the shift, `(P − shift)²` is 0), without computing it again.
+    pub fn add_shift(&mut self) {
+        for (s, c) in self.sum.iter_mut().zip(self.shift.iter()) {
+            *s += c;
         }
     }
 

@@ -1,7 +1,7 @@
 //! Line plots with a log vertical axis written as PNG (log-log, or linear-log for a signed horizontal
 //! quantity): several series, each with a label and optional error bars, axis labels, a title and a
-//! legend in a column right of the axes, where it covers no data. Text is drawn with DejaVu Sans embedded in the binary (plotters'
-//! `ab_glyph` backend), so no system font is needed.
+//! legend in a column right of the axes, where it covers no data (long labels wrap). Text is drawn
+//! with DejaVu Sans embedded in the binary (plotters' `ab_glyph` backend), so no system font is needed.
 
 use crate::error::{Error, Result};
 use plotters::coord::ranged1d::ValueFormatter;
@@ -153,7 +153,8 @@ pub struct LogLogPlot {
     /// The lines, drawn in order, coloured from a fixed palette.
     pub series: Vec<Series>,
     /// Width of the axes with their labels, pixels: the image is wider by the legend's column (as wide
-    /// as its longest label), or columns when its entries do not fit the height.
+    /// as its longest label line, at most [`LEGEND_TEXT`] of text), or columns when its entries do not
+    /// fit the height.
     pub width: u32,
     /// Image height, pixels.
     pub height: u32,
@@ -197,11 +198,20 @@ const LEGEND_ROW: u32 = 20;
 /// Length of a legend entry's line sample, pixels; the text starts [`MARGIN`] after it.
 const SWATCH: u32 = 24;
 
-/// The legend's place right of the axes: entries top down from the axes' top edge, in as many columns
-/// as the plot's height needs.
+/// Widest line of a legend entry's label (14 px text), pixels: a longer label wraps at spaces, so that
+/// one long label (a group of samplers with identical estimates) does not make the legend wider than
+/// the axes.
+const LEGEND_TEXT: u32 = 400;
+/// Line pitch of a legend label that wraps, pixels.
+const LEGEND_LINE: u32 = 16;
+
+/// The legend's place right of the axes: entries top down from the axes' top edge, each label wrapped
+/// to [`LEGEND_TEXT`], in as many columns as the plot's height needs.
 struct LegendLayout {
-    /// Entries per column.
-    rows: usize,
+    /// Each series' label, wrapped.
+    lines: Vec<Vec<String>>,
+    /// Each entry's column and the top of its first row below the legend's top edge, pixels.
+    places: Vec<(u32, u32)>,
     /// Columns.
     columns: u32,
     /// Width of one column (sample, text and margins), pixels.
@@ -211,18 +221,37 @@ struct LegendLayout {
 impl LegendLayout {
     fn new(plot: &LogLogPlot, title_band: u32) -> std::result::Result<Self, String> {
         let font = ("sans-serif", 14).into_font();
+        let lines: Vec<Vec<String>> = plot
+            .series
+            .iter()
+            .map(|s| wrap(&s.label, 14, LEGEND_TEXT))
+            .collect();
         let mut text = 0;
-        for s in &plot.series {
-            let (w, _) = font.box_size(&s.label).map_err(|e| format!("{e:?}"))?;
+        for line in lines.iter().flatten() {
+            let (w, _) = font.box_size(line).map_err(|e| format!("{e:?}"))?;
             text = text.max(w);
         }
         let room = plot
             .height
             .saturating_sub(title_band + 2 * MARGIN + X_LABEL_AREA);
-        let rows = (room / LEGEND_ROW).max(1) as usize;
+        let (mut column, mut top) = (0, 0);
+        let mut places = Vec::with_capacity(lines.len());
+        for label in &lines {
+            let height = LEGEND_ROW + LEGEND_LINE * (label.len() as u32 - 1);
+            if top > 0 && top + height > room {
+                (column, top) = (column + 1, 0);
+            }
+            places.push((column, top));
+            top += height;
+        }
         Ok(LegendLayout {
-            rows,
-            columns: plot.series.len().div_ceil(rows) as u32,
+            lines,
+            places,
+            columns: if plot.series.is_empty() {
+                0
+            } else {
+                column + 1
+            },
             column_width: SWATCH + text + 2 * MARGIN,
         })
     }
@@ -695,8 +724,9 @@ fn draw_legend<'a>(
     let (row, swatch) = (LEGEND_ROW as i32, SWATCH as i32);
     for (i, s) in plot.series.iter().enumerate() {
         let (colour, marker, style) = series_style(s, i);
-        let x = (i / layout.rows) as i32 * layout.column_width as i32 + MARGIN as i32 / 2;
-        let y = MARGIN as i32 + (i % layout.rows) as i32 * row + row / 2;
+        let (column, top) = layout.places[i];
+        let x = column as i32 * layout.column_width as i32 + MARGIN as i32 / 2;
+        let y = MARGIN as i32 + top as i32 + row / 2;
         let line = colour.stroke_width(2);
         if s.dashed {
             // The plot's dashes: 8 px drawn, 6 px left out.
@@ -708,14 +738,19 @@ fn draw_legend<'a>(
             draw_marker(area, (x + swatch / 2, y), marker, style)?;
         }
         // 14 px text is 11 px high in plotters' layout: its top 6 px above the row's middle.
-        draw_text(
-            area,
-            &s.label,
-            (x + swatch + MARGIN as i32 / 2, y - 6),
-            14,
-            &BLACK,
-            false,
-        )?;
+        for (j, text) in layout.lines[i].iter().enumerate() {
+            draw_text(
+                area,
+                text,
+                (
+                    x + swatch + MARGIN as i32 / 2,
+                    y - 6 + j as i32 * LEGEND_LINE as i32,
+                ),
+                14,
+                &BLACK,
+                false,
+            )?;
+        }
     }
     Ok(())
 }
@@ -821,7 +856,8 @@ mod tests {
         // The axes' 640 px and the legend's column right of them, with room for
         // (480 − 40 title − 2·12 margins − 45 axis labels) / 20 = 18 entries.
         let legend = LegendLayout::new(&plot, TITLE_BAND).unwrap();
-        assert_eq!((legend.rows, legend.columns), (18, 1));
+        assert_eq!(legend.columns, 1);
+        assert_eq!(legend.places, [(0, 0), (0, LEGEND_ROW)]);
         assert_eq!((width, height), (640 + legend.width(), 480));
         // Not blank: many non-white pixels, and several colours (lines, text).
         let non_white = buf.chunks(3).filter(|p| p != &[255, 255, 255]).count();
@@ -912,10 +948,40 @@ mod tests {
         }
         let tall = plot(series(&|i| format!("s{i}"), 30));
         let layout = LegendLayout::new(&tall, TITLE_BAND).unwrap();
-        assert_eq!((layout.rows, layout.columns), (18, 2));
+        assert_eq!(layout.columns, 2);
+        assert_eq!(layout.places[17], (0, 17 * LEGEND_ROW));
+        assert_eq!(layout.places[18], (1, 0));
         let c = dir.path().join("c.png");
         write_loglog_png(&c, &tall).unwrap();
         assert_eq!(read_rgb(&c).0, 640 + 2 * layout.column_width);
+        // A label wider than LEGEND_TEXT wraps at its spaces: the column stays that narrow and the
+        // entry takes a line more per wrap, so the next entry starts below all of it.
+        let group = (0..8)
+            .map(|i| format!("optimized table number {i}"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        let wide = plot(series(
+            &|i| {
+                if i == 0 {
+                    group.clone()
+                } else {
+                    format!("s{i}")
+                }
+            },
+            2,
+        ));
+        let layout = LegendLayout::new(&wide, TITLE_BAND).unwrap();
+        let lines = layout.lines[0].len() as u32;
+        assert!(lines >= 3, "{:?}", layout.lines[0]);
+        assert_eq!(layout.lines[0].join(" "), group);
+        assert!(layout.column_width <= SWATCH + LEGEND_TEXT + 2 * MARGIN);
+        assert_eq!(
+            layout.places[1],
+            (0, LEGEND_ROW + (lines - 1) * LEGEND_LINE)
+        );
+        let d = dir.path().join("d.png");
+        write_loglog_png(&d, &wide).unwrap();
+        assert_eq!(read_rgb(&d).0, 640 + layout.column_width);
     }
 
     /// A linear horizontal axis takes values of either sign (a log one would drop them all here).

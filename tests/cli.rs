@@ -2959,47 +2959,47 @@ fn negative_reals_reach_their_flags_check() {
     }
 }
 
+/// `optimize --target TARGET -n 16 FLAGS` is refused with `needle`, and writes nothing.
+fn optimize_rejects(target: &str, flags: &[&str], needle: &str) {
+    let (_dir, out) = tmp("t.npy");
+    let mut args = vec!["optimize", "--target", target, "-n", "16"];
+    args.extend(flags);
+    args.extend(["-o", out.to_str().unwrap()]);
+    rejects(&args, needle, &out);
+}
+
 /// A 2D table has no xy and uv strata: `--strat-radius` and `--strat-weight` are refused by name there,
 /// not recorded in the sidecar and the header's command as if they had been used.
 #[test]
 fn two_d_tables_refuse_the_strata_flags() {
-    let (_dir, out) = tmp("t.npy");
-    let o = out.to_str().unwrap();
-    for (flags, needle) in [
-        (
-            vec!["--strat-weight", "3"],
-            "--strat-weight sets the 4D loss",
-        ),
-        (
-            vec!["--strat-radius", "0.2", "--strat-weight", "3"],
-            "--strat-radius and --strat-weight set the 4D loss",
-        ),
-    ] {
-        let mut args = vec![
-            "optimize",
-            "--target",
-            "targets/blue-noise.toml",
-            "-n",
-            "16",
-        ];
-        args.extend(flags);
-        args.extend(["-o", o]);
-        rejects(&args, needle, &out);
-    }
+    let blue = "targets/blue-noise.toml";
+    optimize_rejects(
+        blue,
+        &["--strat-weight", "3"],
+        "--strat-weight sets the 4D loss",
+    );
+    optimize_rejects(
+        blue,
+        &["--strat-radius", "0.2", "--strat-weight", "3"],
+        "--strat-radius and --strat-weight set the 4D loss",
+    );
 }
 
-/// A radius for a loss term that its weight switches off would be ignored: it is refused by name.
+/// A flag for a loss term that another flag or the target switches off would be ignored: it is
+/// refused by name. Before, a weight with its radius 0 and an annular weight on a variance target
+/// (whose grid has no annuli) gave a table identical to one without them.
 #[test]
-fn a_radius_without_its_term_is_refused() {
-    let (_dir, out) = tmp("t.npy");
-    let o = out.to_str().unwrap();
-    for (flags, needle) in [
+fn a_flag_without_its_term_is_refused() {
+    let (blue, fan) = ("targets/blue-noise.toml", "targets/fan-variance.toml");
+    for (target, flags, needle) in [
         (
-            vec!["--repulsion-radius", "0.5", "--repulsion-weight", "0"],
+            blue,
+            &["--repulsion-radius", "0.5", "--repulsion-weight", "0"][..],
             "--repulsion-radius has no effect with --repulsion-weight 0",
         ),
         (
-            vec![
+            blue,
+            &[
                 "--dims",
                 "4",
                 "--strat-radius",
@@ -3009,18 +3009,73 @@ fn a_radius_without_its_term_is_refused() {
             ],
             "--strat-radius has no effect with --strat-weight 0",
         ),
+        (
+            blue,
+            &["--repulsion-radius", "0", "--repulsion-weight", "5"],
+            "--repulsion-weight has no effect with --repulsion-radius 0",
+        ),
+        (
+            blue,
+            &["--dims", "4", "--strat-radius", "0", "--strat-weight", "5"],
+            "--strat-weight has no effect with --strat-radius 0",
+        ),
+        (
+            fan,
+            &["--annular-weight", "3"],
+            "--annular-weight has no effect here: targets/fan-variance.toml is a variance target",
+        ),
+        (
+            fan,
+            &[
+                "--dims",
+                "4",
+                "--strat-weight",
+                "0",
+                "--annular-weight",
+                "3",
+            ],
+            "and --strat-weight 0 switches off the strata term",
+        ),
+        (
+            "targets/fan-lattice.toml",
+            &["--seed", "3"],
+            "so --seed would not apply",
+        ),
     ] {
-        let mut args = vec![
-            "optimize",
-            "--target",
-            "targets/blue-noise.toml",
-            "-n",
-            "16",
-        ];
-        args.extend(flags);
-        args.extend(["-o", o]);
-        rejects(&args, needle, &out);
+        optimize_rejects(target, flags, needle);
     }
+}
+
+/// A lattice search whose integrand sampling is too large is refused before any work, by its file,
+/// with the placements that would fit (it samples 4096 x 4096 points whatever the extent).
+#[test]
+fn a_lattice_search_too_large_is_refused_at_once() {
+    let (dir, target) = tmp("big.toml");
+    std::fs::write(
+        &target,
+        "kind = \"variance\"\nintegrand = \"fan:s0=0.3,s1=0.7\"\nshear = 0.5\nplacements = 1024\nextent = 2\ndesign = \"lattice\"\n",
+    )
+    .unwrap();
+    let out = dir.path().join("t.npy");
+    let args = [
+        "optimize",
+        "--target",
+        target.to_str().unwrap(),
+        "-n",
+        "64",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let o = anisospec(&args);
+    refused(
+        &o,
+        &args,
+        "big.toml: the variance target would evaluate its integrand 1.718e10 times (1024 placements on 4096 x 4096 points), more than 1.074e9; lower its placements to at most 64",
+        &out,
+    );
+    // Before, it was refused only after the search had started (3.9 to 9.5 s in).
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("searching"), "{err}");
 }
 
 /// A run stopped by `--max-seconds` depends on the machine's speed: it says so on stderr and in the C

@@ -38,7 +38,7 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub sets: usize,
     /// Seed of the random starts (as in every other command).
-    #[arg(long, default_value_t = 1, value_parser = crate::cli::parse_seed, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = DEFAULT_SEED, value_parser = crate::cli::parse_seed, allow_negative_numbers = true)]
     pub seed: u64,
     /// Output table, `.npy` ([sets, N, D] float64); the same numbers go to `.txt`, `.h`, a `.json`
     /// sidecar and a `.log.csv` next to it. The C header's array is named after the file:
@@ -54,7 +54,8 @@ pub struct OptimizeArgs {
     /// Hold the first coordinate (2D) or x and y (4D) where --init put them, one point per interval
     /// [s/N, (s+1)/N) at its centre (by rank if the start is not stratified), and move only the
     /// others. The k1 axis then stays dark up to N, beyond the loss's frequency grid, and in 4D xy
-    /// keeps the start's structure. Use it, with --init padded-pmj02 in 4D, for tables applied
+    /// keeps the start's structure (its strata term is then a constant of the loss, so --strat-radius
+    /// and --strat-weight act on uv alone). Use it, with --init padded-pmj02 in 4D, for tables applied
     /// through the transported shear (widened hairline, double wedge).
     #[arg(long)]
     pub latin: bool,
@@ -163,20 +164,27 @@ fn check_args(args: &OptimizeArgs) -> Result<()> {
     Ok(())
 }
 
-/// Refuses a loss term's radius given with the weight 0 that switches the term off: it would be
-/// ignored.
-fn refuse_radius_without_term(args: &OptimizeArgs) -> Result<()> {
-    for (radius_given, weight, radius_flag, weight_flag) in [
+/// Refuses a loss term's flag that its other flag switches off, so that it would be ignored: a
+/// radius given with the weight 0, a weight given with the radius 0, and an annular weight when no
+/// term of the loss has annuli (a variance target's grid has none, and in 4D neither has the strata
+/// term with --strat-weight 0).
+fn refuse_flags_without_term(args: &OptimizeArgs, target: &Target) -> Result<()> {
+    // A 2D table's strata flags are refused by name in `check_args`.
+    let strata = args.dims == 4;
+    for (radius, weight, radius_given, weight_given, radius_flag, weight_flag) in [
         (
-            args.repulsion_radius != DEFAULT_REPULSION.radius,
+            args.repulsion_radius,
             args.repulsion_weight,
+            args.repulsion_radius != DEFAULT_REPULSION.radius,
+            args.repulsion_weight != DEFAULT_REPULSION.weight,
             "--repulsion-radius",
             "--repulsion-weight",
         ),
         (
-            // A 2D table's strata flags are refused by name in `check_args`.
-            args.dims == 4 && args.strat_radius != DEFAULT_STRATA.radius,
+            args.strat_radius,
             args.strat_weight,
+            strata && args.strat_radius != DEFAULT_STRATA.radius,
+            strata && args.strat_weight != DEFAULT_STRATA.weight,
             "--strat-radius",
             "--strat-weight",
         ),
@@ -186,17 +194,39 @@ fn refuse_radius_without_term(args: &OptimizeArgs) -> Result<()> {
                 "{radius_flag} has no effect with {weight_flag} 0, which switches its term off; leave {radius_flag} out, or give {weight_flag} above 0"
             )));
         }
+        if weight_given && weight > 0.0 && radius == 0.0 {
+            return Err(Error::Usage(format!(
+                "{weight_flag} has no effect with {radius_flag} 0, which switches its term off; leave {weight_flag} out, or give {radius_flag} above 0"
+            )));
+        }
+    }
+    let annuli = !matches!(target, Target::Variance(_)) || (strata && args.strat_weight > 0.0);
+    if !annuli && args.annular_weight != DEFAULT_ANNULAR_WEIGHT {
+        return Err(Error::Usage(format!(
+            "--annular-weight has no effect here: {} is a variance target, whose loss is the predicted variance, with no annuli{}; leave --annular-weight out",
+            args.target.display(),
+            if strata {
+                ", and --strat-weight 0 switches off the strata term, which has them"
+            } else {
+                ""
+            }
+        )));
     }
     Ok(())
 }
 
-/// Refuses the flags a lattice design would ignore (it searches lattices; it moves no points): a
+/// `--seed`'s default.
+const DEFAULT_SEED: u64 = 1;
+
+/// Refuses the flags a lattice design would ignore (it searches lattices; it moves no points and
+/// draws nothing at random): the seed, a
 /// start, held strata, the solver's limits and the loss's weights. A value given equal to the
 /// default cannot be told from the default and passes.
 fn refuse_solver_flags(args: &OptimizeArgs) -> Result<()> {
     let given: Vec<&str> = [
         (args.init.is_some(), "--init"),
         (args.latin, "--latin"),
+        (args.seed != DEFAULT_SEED, "--seed"),
         (args.exact, "--exact"),
         (args.eps != DEFAULT_EPS, "--eps"),
         (args.max_iters != DEFAULT_LIMITS.max_iters, "--max-iters"),
@@ -248,10 +278,21 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         )));
     }
     let lattice_search = matches!(&target, Target::Variance(v) if v.design() == Design::Lattice);
-    if lattice_search {
-        refuse_solver_flags(args)?;
+    // A target beyond reach at this N is the file's problem: say which file.
+    let in_file = |e: Error| match e {
+        Error::Input(m) => Error::Input(format!("{}: {m}", args.target.display())),
+        other => other,
+    };
+    if let Target::Variance(v) = &target {
+        if lattice_search {
+            refuse_solver_flags(args)?;
+            // The search's own limits, before the integrand is sampled for it.
+            lattice_design::check_n(args.n)?;
+            v.sampling_side(lattice_design::SEARCH_RES)
+                .map_err(in_file)?;
+        }
     }
-    refuse_radius_without_term(args)?;
+    refuse_flags_without_term(args, &target)?;
     // The table at -o as given (`t.NPY` stays `t.NPY`), the other files beside it.
     let outputs: Vec<PathBuf> = std::iter::once(args.output.clone())
         .chain(
@@ -306,11 +347,6 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         init: args.init.clone(),
         latin: args.latin,
         annular_weight: args.annular_weight,
-    };
-    // A target beyond reach at this N is the file's problem: say which file.
-    let in_file = |e: Error| match e {
-        Error::Input(m) => Error::Input(format!("{}: {m}", args.target.display())),
-        other => other,
     };
     let objective = setup.objective().map_err(in_file)?;
     for term in &objective.terms {

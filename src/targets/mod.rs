@@ -648,8 +648,15 @@ impl Target {
         let sqrt_n = (n as f64).sqrt();
         let largest = (crate::spectrum::MAX_RES / 2 - 1) as f64;
         if !(fit_radius.is_finite() && fit_radius <= largest) {
+            // The keys that set the reach (see `extent`).
+            let keys = match self {
+                Target::Hairline(_) => "its length or inner_radius",
+                Target::DoubleWedge(_) => "its radius or inner_radius",
+                Target::BlueNoise(_) => "its radius",
+                Target::Image(_) | Target::Variance(_) => "its extent",
+            };
             return Err(Error::Input(format!(
-                "the target reaches |k| = {fit_radius:.3e} frequency cells at N = {n}, beyond the largest grid ({} cells, |k| <= {largest}); shorten its length or radius (in units of sqrt(N)) or lower N",
+                "the target reaches |k| = {fit_radius:.3e} frequency cells at N = {n}, beyond the largest grid ({} cells, |k| <= {largest}); lower {keys} (in units of sqrt(N)) or N",
                 crate::spectrum::MAX_RES
             )));
         }
@@ -1177,6 +1184,25 @@ mod tests {
                 && m.contains("fraction 3.036e-7."),
             "{m}"
         );
+        // A reach beyond the largest grid names the keys that set it (a variance target's extent
+        // was told to shorten a length or radius it does not have).
+        for (text, keys) in [
+            (
+                "kind = \"variance\"\nintegrand = \"sheared:s=0.5\"\nshear = 0.5\nextent = 1e300\n",
+                "lower its extent (in units of sqrt(N)) or N",
+            ),
+            (
+                "kind = \"hairline\"\nshear = 0.5\nhalf_width = 0\nlength = 1024\n",
+                "lower its length or inner_radius (in units of sqrt(N)) or N",
+            ),
+        ] {
+            let m = Target::parse(text)
+                .unwrap()
+                .grid(64)
+                .unwrap_err()
+                .to_string();
+            assert!(m.contains(keys), "{m}");
+        }
         let e = Target::parse("kind = \"blue-noise\"\nradius = 0.5\ndark_weight = 1e300\n");
         assert!(e
             .unwrap_err()

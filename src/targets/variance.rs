@@ -244,8 +244,9 @@ impl Variance {
         let evaluations = self.placements().max(1).saturating_mul(samples * samples);
         if evaluations > MAX_EVALUATIONS {
             return Err(Error::Input(format!(
-                "the variance target would evaluate its integrand {evaluations:.3e} times ({} placements on {samples} x {samples} points), more than {MAX_EVALUATIONS:.3e}; lower its placements or its extent",
-                self.placements()
+                "the variance target would evaluate its integrand {evaluations:.3e} times ({} placements on {samples} x {samples} points), more than {MAX_EVALUATIONS:.3e}; lower its placements to at most {}",
+                self.placements(),
+                MAX_EVALUATIONS / (samples * samples)
             )));
         }
         Ok(samples)

@@ -3046,6 +3046,28 @@ fn a_flag_without_its_term_is_refused() {
     }
 }
 
+/// A start sampler whose nearest N is 1 is refused with the smallest N above 1 it makes (an optimized
+/// set needs 2 points; "the nearest N it allows is 1" alone named an N optimize refuses).
+#[test]
+fn a_start_of_one_point_names_the_n_that_works() {
+    let (_dir, out) = tmp("t.npy");
+    rejects(
+        &[
+            "optimize",
+            "--target",
+            "targets/widened-hairline.toml",
+            "--init",
+            "jittered",
+            "-n",
+            "2",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "the nearest N it allows is 1, but an optimized set needs at least 2 points: use N = 4, the smallest above 1 that jittered makes",
+        &out,
+    );
+}
+
 /// A lattice search whose integrand sampling is too large is refused before any work, by its file,
 /// with the placements that would fit (it samples 4096 x 4096 points whatever the extent).
 #[test]

@@ -508,12 +508,9 @@ impl CompareConfig {
             .iter()
             .map(|&n| ("ns", n))
             .chain([("spectra_n", self.spectra_n)]);
+        // Too small an N is refused by each table's own check below, which names the N it builds
+        // from (N = 9 for a table with strata, where "2 or more" was named before).
         for (key, n) in sizes.clone() {
-            if n < 2 {
-                return Err(Error::Usage(format!(
-                    "{key} asks for N = {n}, but an optimized table (tables) needs at least 2 points; raise {key} to 2 or more, or set tables = []"
-                )));
-            }
             crate::points::coordinate_count(self.table_sets, n, 4).map_err(|e| {
                 Error::Usage(format!(
                     "table_sets = {} at N = {n} (from {key}): {e}, e.g. table_sets = 16",
@@ -837,6 +834,29 @@ mod tests {
             ..study
         };
         assert!(fine.validate().is_ok());
+    }
+
+    /// A study N too small for its tables names the N they build from, and that N passes (before,
+    /// N = 1 was told "2 or more", and N = 2 was then refused again).
+    #[test]
+    fn a_table_size_too_small_names_the_n_it_builds_from() {
+        for spectra_n in [1, 2] {
+            let study = CompareConfig {
+                spectra_n,
+                ..CompareConfig::default_suite()
+            };
+            let e = study.validate().unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("at N = {spectra_n} (from spectra_n)"))
+                    && e.contains("from N = 9 on; use N >= 9"),
+                "{e}"
+            );
+        }
+        let fine = CompareConfig {
+            spectra_n: 9,
+            ..CompareConfig::default_suite()
+        };
+        fine.validate().unwrap();
     }
 
     #[cfg(unix)]

@@ -432,7 +432,20 @@ pub fn optimize_sets(
     let init = match &setup.init {
         Some(name) => {
             let sampler = crate::samplers::build(name, setup.dims)?;
-            crate::samplers::validate_n(sampler.as_ref(), setup.n)?;
+            crate::samplers::validate_n(sampler.as_ref(), setup.n).map_err(|e| {
+                // The nearest N the sampler allows may be 1, which no optimized set has.
+                match (e, sampler.check_n(setup.n)) {
+                    (Error::Usage(m), Err(1)) => {
+                        match (2..1 << 16).find(|&m| sampler.check_n(m).is_ok()) {
+                            Some(m2) => Error::Usage(format!(
+                                "{m}, but an optimized set needs at least 2 points: use N = {m2}, the smallest above 1 that {name} makes"
+                            )),
+                            None => Error::Usage(m),
+                        }
+                    }
+                    (e, _) => e,
+                }
+            })?;
             Some(sampler)
         }
         None => None,

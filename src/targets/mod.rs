@@ -76,6 +76,12 @@ fn located(error: &str, text: &str) -> String {
     }
 }
 
+/// Below this many points a shape target's refusal searches the N up to `4 × SMALL_N` for the
+/// smallest at which it builds (a few cells decide there, so the next N that works is hard to tell
+/// from the message alone: a blue-noise disc of radius 0.35 needs N = 9, not the 4 its cell count
+/// suggests). Grids that small take microseconds.
+pub const SMALL_N: usize = 64;
+
 /// The largest number of dark cells, in units of `N`, that a target may ask of `N` points.
 pub const REACH: f64 = 1.0;
 
@@ -557,17 +563,33 @@ impl Target {
 
     /// Lays the target out for `n` points: grid size, `T`, weights and dark mask. Fails with
     /// `Error::Input` when the dark region holds more than [`REACH`]` × N` cells, naming the reachable
-    /// fraction.
+    /// fraction; below [`SMALL_N`] points, a shape's refusal names the smallest larger N it builds at.
     pub fn grid(&self, n: usize) -> Result<TargetGrid> {
+        self.grid_within(n, self.fit_radius(n))
+            .map_err(|e| match e {
+                Error::Input(m) if n < SMALL_N && !matches!(self, Target::Variance(_)) => {
+                    match (n + 1..=4 * SMALL_N)
+                        .find(|&m| self.grid_within(m, self.fit_radius(m)).is_ok())
+                    {
+                        Some(smallest) => Error::Input(format!(
+                        "{m}; the smallest N above {n} at which this target builds is {smallest}"
+                    )),
+                        None => Error::Input(m),
+                    }
+                }
+                other => other,
+            })
+    }
+
+    /// The radius of the grid [`Target::grid`] fits at `n` points, in frequency cells: a margin
+    /// around the features so the energy they push out is kept flat too; a variance target's extent.
+    fn fit_radius(&self, n: usize) -> f64 {
         let sqrt_n = (n as f64).sqrt();
         let ext = self.extent() * sqrt_n;
-        // Fit a margin around the features so the energy they push out is kept flat too; a variance
-        // target's extent is its fit radius.
-        let fit_radius = match self {
+        match self {
             Target::Variance(_) => ext.max(4.0),
             _ => (2.0 * ext).max(ext + sqrt_n).max(4.0),
-        };
-        self.grid_within(n, fit_radius)
+        }
     }
 
     /// The area of the dark region in normalized frequency, i.e. its expected number of frequency
@@ -634,9 +656,8 @@ impl Target {
         // radius suits fewer points than that (a smaller one darkens nothing, a larger one too much).
         if matches!(self, Target::BlueNoise(_)) && REACH * (n as f64) < 4.0 {
             return Err(Error::Input(format!(
-                "N = {n} is too small for a blue-noise target: its smallest dark disc holds the 4 frequency cells at |k| = 1, and {n} points can darken only about {}; use N >= {}",
+                "N = {n} is too small for a blue-noise target: its smallest dark disc holds the 4 frequency cells at |k| = 1, and {n} points can darken only about {}",
                 number(REACH * n as f64),
-                (4.0 / REACH).ceil()
             )));
         }
         // Refuse hopeless targets before laying out a grid that may not fit in memory.
@@ -1290,6 +1311,34 @@ mod tests {
                     * 2;
                 assert_eq!(g.dark_cells, on_line, "s = {s}, N = {n}");
             }
+        }
+    }
+
+    /// Below SMALL_N a refusal names the smallest larger N that builds, and that N does build while
+    /// every N between does not: the fix it names works. Before, a blue-noise disc of radius 0.35 at
+    /// N = 2 was told "use N >= 4", refused again up to N = 8.
+    #[test]
+    fn a_small_n_refusal_names_the_n_that_builds() {
+        for (text, n, smallest) in [
+            ("kind = \"blue-noise\"\nradius = 0.35\n", 2, 9),
+            ("kind = \"blue-noise\"\nradius = 0.35\n", 4, 9),
+            ("kind = \"blue-noise\"\nradius = 0.5\n", 2, 5),
+            (
+                "kind = \"hairline\"\nshear = 0.0\nhalf_width = 0.0625\nopening = 0.09\nlength = 1.27\ninner_radius = 0.35\n",
+                3,
+                4,
+            ),
+        ] {
+            let t = Target::parse(text).unwrap();
+            let m = t.grid(n).unwrap_err().to_string();
+            assert!(
+                m.ends_with(&format!(
+                    "; the smallest N above {n} at which this target builds is {smallest}"
+                )),
+                "{text} N = {n}: {m}"
+            );
+            assert!((n + 1..smallest).all(|m| t.grid(m).is_err()), "{text}");
+            t.grid(smallest).unwrap();
         }
     }
 

@@ -995,6 +995,30 @@ fn compare_rebuilds_a_corrupted_cached_table() {
             .collect()
     };
     assert_eq!(untimed(&check_report(&second, &ns)), untimed(&points));
+
+    // A readable table with fewer sets than table_sets (one of its 2) is rebuilt too: it was reused,
+    // and the report said "a table of 2 sets".
+    let whole = anisospec::points::io::read_points(&table).unwrap();
+    let one = anisospec::points::PointSets::from_sets(4, vec![whole.set(0).to_vec()]).unwrap();
+    anisospec::points::io::write_points(&table, &one).unwrap();
+    let third = dir.path().join("third");
+    let o = anisospec(&[
+        "compare",
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        third.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{:?}: {err}", o.status.code());
+    assert!(
+        err.contains("holds 1 set, not the 2 of table_sets"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&table).unwrap(), built);
+    assert_eq!(untimed(&check_report(&third, &ns)), untimed(&points));
 }
 
 /// A table whose sets stopped at the time limit is cached with that limit: a run with the same

@@ -233,7 +233,7 @@ impl TableCache {
                             self.seconds
                         );
                     } else {
-                        match load_table(&path, n) {
+                        match load_table(&path, n, self.sets) {
                             Ok(table) => {
                                 let mut warned = self.warned.lock().expect("warned lock");
                                 if stopped > 0 && !warned.contains(&path) {
@@ -293,7 +293,7 @@ impl TableCache {
                 writeln!(w, "{sidecar:#}")
             })
         })?;
-        Ok((load_table(&path, n)?, seconds))
+        Ok((load_table(&path, n, self.sets)?, seconds))
     }
 
     /// The table's sets moved by the optimizer, and how many stopped at the time limit (with a
@@ -365,16 +365,24 @@ fn table_setup(target: Target, n: usize, seconds: f64) -> Setup {
     }
 }
 
-/// The table file `path`, which must hold sets of `n` 4D points.
-fn load_table(path: &Path, n: usize) -> Result<Table> {
+/// The table file `path`, which must hold `sets` sets of `n` 4D points.
+fn load_table(path: &Path, n: usize, sets: usize) -> Result<Table> {
     let table = Table::load(&path.to_string_lossy(), 4)?;
-    match table.check_n(n) {
-        Ok(()) => Ok(table),
-        Err(m) => Err(Error::Input(format!(
+    if let Err(m) = table.check_n(n) {
+        return Err(Error::Input(format!(
             "{} holds sets of {m} points, not {n}",
             path.display()
-        ))),
+        )));
     }
+    let held = table.set_count(n)?;
+    if held != sets {
+        return Err(Error::Input(format!(
+            "{} holds {held} set{}, not the {sets} of table_sets",
+            path.display(),
+            if held == 1 { "" } else { "s" }
+        )));
+    }
+    Ok(table)
 }
 
 /// Checks, without optimizing, that a table of `target` can be built at `n` points for a subject

@@ -72,6 +72,11 @@ impl Table {
         })
     }
 
+    /// How many sets the table holds for `n` (which passed [`Sampler::check_n`]), read on first use.
+    pub fn set_count(&self, n: usize) -> Result<usize> {
+        Ok(self.sets(n)?.sets())
+    }
+
     /// The sets for `n` (which passed [`Sampler::check_n`]), read on first use.
     fn sets(&self, n: usize) -> Result<&PointSets> {
         let member = self

@@ -325,7 +325,12 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
         .map(|r| (r[0].clone(), r[2].clone()))
         .collect();
     assert_eq!(integrands[0][1], "`sheared:s=0.5,c=0.7@xu`");
-    assert!(integrands[1][1].starts_with("`pixel:px="), "{integrands:?}");
+    // The pixel's definition gives the study's reference count, so that converge --integrand with
+    // it uses the same reference (it left it out, and converge took the default 1048576 rays).
+    assert!(
+        integrands[1][1].starts_with("`pixel:px=") && integrands[1][1].ends_with(",refcount=4096`"),
+        "{integrands:?}"
+    );
     assert_eq!(subjects.len(), 2, "{subjects:?}");
     // axes.json labels the npy arrays' axes: the integrands and samplers in the order of the
     // tables, the study's N.

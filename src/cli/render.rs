@@ -60,7 +60,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub cache: Option<PathBuf>,
     /// Output image; IMG.exr (float radiance, channel Y) and IMG.png (preview, gamma 2.2, white at
-    /// radiance 1, scaled up to at least 256 px) are written: name it IMG.exr, IMG.png or IMG.
+    /// radiance 1, scaled up by a whole factor until its longer side is at least 256 px) are
+    /// written: name it IMG.exr, IMG.png or IMG.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
 }

@@ -138,10 +138,17 @@ impl PixelIntegrand {
         })
     }
 
-    /// Uses `count` rays for the reference (see [`check_ref_count`]).
+    /// Uses `count` rays for the reference (see [`check_ref_count`]); the name then gives the count
+    /// unless it is the default, so that `converge --integrand NAME` uses the same reference.
     pub fn with_ref_count(mut self, count: usize) -> Result<Self> {
         check_ref_count(count)?;
         self.ref_count = count;
+        let (px, py) = (self.px, self.py);
+        self.label = if count == DEFAULT_PIXEL_REF_COUNT {
+            format!("pixel:px={px},py={py}")
+        } else {
+            format!("pixel:px={px},py={py},refcount={count}")
+        };
         self.reference = OnceLock::new();
         Ok(self)
     }

@@ -289,11 +289,19 @@ fn parse_params(fam: &Family, list: &str) -> Result<Params> {
             )));
         }
         let v: f64 = value.trim().parse().map_err(|_| {
-            Error::Usage(format!(
-                "{}: {key}={} is not a number",
-                fam.name,
-                value.trim()
-            ))
+            if value.trim().is_empty() {
+                // `theta=+30` reaches here as `theta=`: '+' joins integrands into a sum.
+                Error::Usage(format!(
+                    "{}: {key}= has no value; give {key}=NUMBER (a '+' or '*' joins integrands, so a sign '+' cannot lead a number: write {key}=30, not {key}=+30)",
+                    fam.name
+                ))
+            } else {
+                Error::Usage(format!(
+                    "{}: {key}={} is not a number",
+                    fam.name,
+                    value.trim()
+                ))
+            }
         })?;
         if !v.is_finite() {
             return Err(Error::Usage(format!(
@@ -406,6 +414,8 @@ mod tests {
         assert!(msg("fan:s0=0.7,s1=0.3").contains("s0=0.7 > s1=0.3"));
         assert!(msg("disc:radius=0.3").contains("unknown key 'radius'"));
         assert!(msg("disc:r=abc").contains("not a number"));
+        // A leading '+' splits the spec into a sum: the empty value says so.
+        assert!(msg("step:theta=+30").contains("step: theta= has no value; give theta=NUMBER"));
         assert!(msg("disc@xq").contains("not a projection"));
         assert!(msg("gaussian*disc").contains("share a dimension"));
         assert!(msg("gaussian+disc@uv").contains("mixes"));

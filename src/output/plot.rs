@@ -409,7 +409,8 @@ type Labels = dyn Fn(&f64) -> String;
 type LogAxis = plotters::coord::combinators::WithKeyPoints<LogCoord<f64>>;
 
 /// Where a log axis from `lo` to `hi` (`0 < lo < hi`) `pixels` long puts its labels: the first of
-/// powers of two (with `powers_of_two`, for a horizontal axis of counts such as N, `lo ≥ 1`), 1-2-5 in each decade, 1 to 9 in each decade (for
+/// powers of two from 1 (with `powers_of_two`, for a horizontal axis of counts such as N), 1-2-5 in
+/// each decade, 1 to 9 in each decade (for
 /// a range too narrow to hold two of 1-2-5), every decade, and every k-th decade whose labels, as
 /// [`tick_label`] writes them in 14 px text, do not run into one another along `direction`: at least
 /// two labels, and every label distinct. Every axis that [`log_range`] makes holds at least one of
@@ -439,7 +440,9 @@ fn log_ticks(lo: f64, hi: f64, pixels: f64, direction: Direction, powers_of_two:
             .collect()
     };
     let mut candidates: Vec<Vec<f64>> = Vec::new();
-    if powers_of_two && lo >= 1.0 {
+    // An axis of counts starts at 1 or above, or less than a factor 2 below 1 where the padding of
+    // [`log_range`] puts an axis from N = 1: its first power of two is then 1 or more.
+    if powers_of_two && lo > 0.5 {
         let twos = (lo.log2().ceil() as i32)..=(hi.log2().floor() as i32);
         candidates.push(twos.map(|k| 2f64.powi(k)).collect());
     }
@@ -1053,6 +1056,19 @@ mod tests {
         assert_eq!(ticks, [16.0, 32.0, 64.0, 128.0, 256.0, 512.0, 1024.0]);
         let labels: Vec<String> = ticks.iter().map(|&v| tick_label(v)).collect();
         assert_eq!(labels.join(" "), "16 32 64 128 256 512 1024");
+        // Counts from 1: the padding puts the axis's start below 1, and the powers of two still
+        // label it (only 1 and 2, of 1-2-5, were labelled over N = 1 to 4).
+        let (lo, hi) = log_range([1.0, 4.0].into_iter()).unwrap();
+        assert!(lo < 1.0, "{lo}");
+        assert_eq!(
+            log_ticks(lo, hi, width, Direction::Horizontal, true),
+            [1.0, 2.0, 4.0]
+        );
+        // Times from 0.002 ms are no counts: no powers of two from 1, which would leave the axis
+        // below 1 unlabelled.
+        let (lo, hi) = log_range([0.002, 100.0].into_iter()).unwrap();
+        let ticks = log_ticks(lo, hi, width, Direction::Horizontal, true);
+        assert!(ticks[0] <= 0.002 * 10.0, "{ticks:?}");
         let (lo, hi) = log_range([2e-6, 3e-3].into_iter()).unwrap();
         let ticks = log_ticks(lo, hi, width, Direction::Horizontal, true);
         assert!(ticks.contains(&2e-6) && ticks.contains(&5e-5), "{ticks:?}");

@@ -966,20 +966,7 @@ fn compare_rebuilds_a_corrupted_cached_table() {
     let built = std::fs::read(&table).unwrap();
     std::fs::write(&table, b"not an npy file").unwrap();
 
-    let config = dir.path().join("second.toml");
-    std::fs::write(&config, study(&ns)).unwrap();
-    let second = dir.path().join("second");
-    let o = anisospec(&[
-        "compare",
-        "--config",
-        config.to_str().unwrap(),
-        "--out",
-        second.to_str().unwrap(),
-        "--cache",
-        cache.to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{:?}: {err}", o.status.code());
+    let (second, err) = compare_logged(dir.path(), "second", &study(&ns), &cache);
     assert!(
         err.contains("rebuilding") && err.contains(table.file_name().unwrap().to_str().unwrap()),
         "{err}"
@@ -1006,18 +993,7 @@ fn compare_rebuilds_a_corrupted_cached_table() {
     let whole = anisospec::points::io::read_points(&table).unwrap();
     let one = anisospec::points::PointSets::from_sets(4, vec![whole.set(0).to_vec()]).unwrap();
     anisospec::points::io::write_points(&table, &one).unwrap();
-    let third = dir.path().join("third");
-    let o = anisospec(&[
-        "compare",
-        "--config",
-        config.to_str().unwrap(),
-        "--out",
-        third.to_str().unwrap(),
-        "--cache",
-        cache.to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{:?}: {err}", o.status.code());
+    let (third, err) = compare_logged(dir.path(), "third", &study(&ns), &cache);
     assert!(
         err.contains("holds 1 set, not the 2 of table_sets"),
         "{err}"

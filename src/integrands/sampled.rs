@@ -14,34 +14,72 @@ use rustfft::FftPlanner;
 pub fn sampled_power(eval: impl Fn(f64, f64) -> f64 + Sync, res: usize, m: usize) -> Vec<f64> {
     let fft = FftPlanner::new().plan_fft_forward(m);
     let scale = 1.0 / (m * m) as f64;
-    // rows[i]: the first coordinate at (i + ½)/m, transformed along the second.
-    let mut rows: Vec<Complex64> = vec![Complex64::new(0.0, 0.0); m * m];
-    rows.par_chunks_exact_mut(m)
-        .enumerate()
-        .for_each(|(i, row)| {
+    let half = (res / 2) as i64;
+    let bin = |k: i64| k.rem_euclid(m as i64) as usize;
+    // kept[i * res + c]: the first coordinate at (i + ½)/m, transformed along the second, at the kept
+    // k2 = c − res/2 alone. Keeping `res` of each row's `m` coefficients takes m/res times less
+    // memory than the whole grid (268 MB at m = 4096), whose fresh pages cost more system time
+    // than its transforms took.
+    let mut kept: Vec<Complex64> = vec![Complex64::new(0.0, 0.0); m * res];
+    kept.par_chunks_exact_mut(res).enumerate().for_each_init(
+        || vec![Complex64::new(0.0, 0.0); m],
+        |row, (i, out)| {
             let a = (i as f64 + 0.5) / m as f64;
             for (j, z) in row.iter_mut().enumerate() {
                 let b = (j as f64 + 0.5) / m as f64;
                 *z = Complex64::new(eval(a, b) * scale, 0.0);
             }
             fft.process(row);
-        });
-    let half = (res / 2) as i64;
-    let bin = |k: i64| k.rem_euclid(m as i64) as usize;
-    // One column per kept k2, transformed along the first coordinate.
-    let columns: Vec<Vec<Complex64>> = (-half..half)
-        .into_par_iter()
-        .map(|k2| {
-            let mut col: Vec<Complex64> = (0..m).map(|i| rows[i * m + bin(k2)]).collect();
-            fft.process(&mut col);
-            col
-        })
-        .collect();
+            for (c, o) in out.iter_mut().enumerate() {
+                *o = row[bin(c as i64 - half)];
+            }
+        },
+    );
+    // One column per kept k2, transformed along the first coordinate: row c of the output.
     let mut out = vec![0.0; res * res];
-    for (i, col) in columns.iter().enumerate() {
-        for (j, v) in out[i * res..(i + 1) * res].iter_mut().enumerate() {
-            *v = col[bin(j as i64 - half)].norm_sqr();
-        }
-    }
+    out.par_chunks_exact_mut(res).enumerate().for_each_init(
+        || vec![Complex64::new(0.0, 0.0); m],
+        |col, (c, out)| {
+            for (i, z) in col.iter_mut().enumerate() {
+                *z = kept[i * res + c];
+            }
+            fft.process(col);
+            for (j, v) in out.iter_mut().enumerate() {
+                *v = col[bin(j as i64 - half)].norm_sqr();
+            }
+        },
+    );
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The FFT path against the definition it computes, a direct sum over the samples:
+    /// `ĝ(k) = (1/m²) Σ g((i + ½)/m, (j + ½)/m) e^{−2πi (k1 (i + ½) + k2 (j + ½)) / m}`, for a step
+    /// (every frequency lit) on a grid small enough to sum directly. Rounding of the 1024-term sums
+    /// is about 1e-16 of the largest |ĝ|² (g's mean², here 0.3²).
+    #[test]
+    fn the_transform_is_the_direct_sum_of_the_samples() {
+        let g = |a: f64, b: f64| if a + 0.3 * b < 0.6 { 1.0 } else { 0.0 } * (1.0 + a * b);
+        let (res, m) = (8, 32);
+        let fast = sampled_power(g, res, m);
+        let half = (res / 2) as i64;
+        let mut worst: f64 = 0.0;
+        for (idx, &p) in fast.iter().enumerate() {
+            let (k1, k2) = ((idx % res) as i64 - half, (idx / res) as i64 - half);
+            let mut sum = Complex64::new(0.0, 0.0);
+            for i in 0..m {
+                for j in 0..m {
+                    let (a, b) = ((i as f64 + 0.5) / m as f64, (j as f64 + 0.5) / m as f64);
+                    let phase = -2.0 * std::f64::consts::PI * (k1 as f64 * a + k2 as f64 * b);
+                    sum += Complex64::from_polar(g(a, b), phase);
+                }
+            }
+            let direct = (sum / (m * m) as f64).norm_sqr();
+            worst = worst.max((p - direct).abs());
+        }
+        assert!(worst < 1e-14, "largest difference {worst:e}");
+    }
 }

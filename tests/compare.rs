@@ -222,8 +222,9 @@ fn sheared_lattice_on_the_pixels() {
 }
 
 /// Robustness to the oracle: off by 25 %, the sheared hairline loses most of its gain on the
-/// single-depth pixel, yet stays ahead of the classical samplers there (measured 3.2x exact, 2.1-2.6x
-/// off by 25 %, N = 256).
+/// single-depth pixel (N = 256), yet stays ahead of the classical samplers there by more than 3
+/// combined standard errors, but for the lattice, which it is ahead of by only 2.4 (25 % low) and 3.5
+/// (25 % high) standard errors (9.5e-6 and 7.8e-6 against 1.3e-5 ± 1.3e-6; sobol 2.0e-5, z ≥ 5.4).
 #[test]
 fn sheared_hairline_degrades_with_oracle_error() {
     let dir = tempfile::tempdir().unwrap();
@@ -232,6 +233,19 @@ fn sheared_hairline_degrades_with_oracle_error() {
     let tables = TableCache::new(&cfg, dir.path());
     let spec = SamplerSpec::Sheared("padded-mj".into(), ShearMode::Transported);
     let exact = mse(&spec, subject, 256, 1.0, &tables);
+    let classical: Vec<(&str, ConvergePoint)> = CLASSICAL
+        .iter()
+        .map(|&name| {
+            let c = mse(
+                &SamplerSpec::Classical(name.into()),
+                subject,
+                256,
+                1.0,
+                &tables,
+            );
+            (name, c)
+        })
+        .collect();
     for scale in [0.75, 1.25] {
         let off = mse(&spec, subject, 256, scale, &tables);
         assert!(
@@ -242,6 +256,19 @@ fn sheared_hairline_degrades_with_oracle_error() {
             exact.mse,
             exact.mse_stderr
         );
+        // The lattice, the strongest classical sampler here, is not told apart (z = 2.4 and 3.5
+        // measured): reported only.
+        for (name, c) in &classical {
+            let z = z_below(&off, c);
+            assert!(
+                *name == "lattice" || z > 3.0,
+                "x{scale} against {name}: {:.3e} ± {:.1e} vs {:.3e} ± {:.1e}, z = {z:.1}",
+                off.mse,
+                off.mse_stderr,
+                c.mse,
+                c.mse_stderr,
+            );
+        }
     }
 }
 

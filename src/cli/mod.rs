@@ -93,6 +93,13 @@ pub fn parse_shear(text: &str) -> std::result::Result<(f64, f64), String> {
     }
 }
 
+/// `--scene`'s help, shared by the commands that render or look at the built-in scene.
+pub const SCENE_HELP: &str = "TOML scene file overriding the built-in camera, every key optional: width and height \
+(pixels; default 64 x 64), fov (vertical field of view, degrees; 33.4), position (lens centre, world units; \
+[0, 0, 0], looking down +z), focus (depth of the plane in focus, world units; 3) and aperture (side of the square \
+lens, world units; 0.04, 0 a pinhole). Without it the built-in 64x64 Cornell box is used; a camera whose shears \
+could pass 1e6 in magnitude is refused.";
+
 /// Parses `--seed`: a whole number from 0 to `u64::MAX`. Negative numbers reach this parser (the
 /// flags using it allow them), so that `--seed -1` is answered with the range rather than as an
 /// unknown flag.

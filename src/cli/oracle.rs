@@ -16,9 +16,8 @@ const CLASSES: [PixelClass; 3] = [
 /// Writes the depth oracle of the scene as EXR, npy and a PNG picture.
 #[derive(clap::Args, Debug)]
 pub struct OracleArgs {
-    /// TOML scene file overriding the built-in camera (width, height, fov, position, focus, aperture);
-    /// without it the built-in 64x64 Cornell box is used.
-    #[arg(long)]
+    /// TOML scene file (see --help).
+    #[arg(long, help = super::SCENE_HELP)]
     pub scene: Option<PathBuf>,
     /// Output path; FILE.exr (channels depth, sx, sy, s_min, s_max, class), FILE.npy (float64
     /// [height, width, 6], same channel order, row 0 at the top of the image) and FILE.png (the

@@ -24,8 +24,8 @@ pub const MAX_RAY_CASTS: u64 = 1 << 30;
 /// Writes |f^(k1, k2)|^2 of one pixel's integrand for a projection, as npy, EXR and PNG.
 #[derive(clap::Args, Debug)]
 pub struct PixelSpectrumArgs {
-    /// TOML scene file overriding the built-in camera; without it the built-in Cornell box is used.
-    #[arg(long)]
+    /// TOML scene file (see --help).
+    #[arg(long, help = super::SCENE_HELP)]
     pub scene: Option<PathBuf>,
     /// The pixel as COLUMN,ROW (row 0 at the top; 0 to width − 1 and height − 1, 0 to 63 in the
     /// built-in scene), e.g. --pixel 20,20.

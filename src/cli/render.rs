@@ -17,13 +17,12 @@ use std::time::Instant;
 /// Renders the scene and reports the image's MSE against the reference.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// TOML scene file overriding the built-in camera (width, height, fov, position, focus, aperture);
-    /// a camera whose shears could pass 1e6 in magnitude is refused.
-    #[arg(long)]
+    /// TOML scene file (see --help).
+    #[arg(long, help = super::SCENE_HELP)]
     pub scene: Option<PathBuf>,
     /// 4D sampler (see `anisospec samplers`), e.g. random, oa, sobol, padded-mj, xuyv-mj, or
     /// table:PATH (optimized sets), or lattice:Z1:Z2:Z3:Z4 (a rank-1 lattice with that generating
-    /// vector). Not used with --reference.
+    /// vector). Required, unless --reference is given (which uses none).
     #[arg(long, required_unless_present = "reference")]
     pub sampler: Option<String>,
     /// Samples (rays) per pixel; must be a count the sampler allows (N × 4 at most 2^28 coordinates),

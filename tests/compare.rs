@@ -609,13 +609,13 @@ fn local_rate(a: &ConvergePoint, b: &ConvergePoint) -> (f64, f64) {
 /// of the issue's list), 4.2–6.0× over unsheared Sobol (4D and on the xu plane) and PMJ02 on the xu
 /// plane (193× over padded PMJ02); 1.95× and 2.04× over sheared Sobol and PMJ02 on the xu plane,
 /// stronger baselines than the issue asks for (N = 256: 2.96×, 1.99×, 1.87×; N = 64: 2.46×, 2.09×,
-/// 2.28×). The double-wedge shape table: 2.55 ± 0.16× over sheared MJ,
-/// 1.38× and 1.44× over sheared Sobol and PMJ02 (N = 256: 2.28×, 1.53×, 1.44×).
+/// 2.28×). The double-wedge shape table: 2.53 ± 0.16× over sheared MJ,
+/// 1.37× and 1.43× over sheared Sobol and PMJ02 (N = 256: 2.37×, 1.59×, 1.50×).
 ///
 /// Reported, not asserted: rank-1 lattices, outside the issue's list. The shape table's gain over the
-/// lattice on the xu plane (`xuyv-lattice`) is 1.33/1.39/1.68× unsheared and 0.57/0.79/1.18× sheared
-/// at N = 64, 256, 1024; over the 4D Korobov lattice (`lattice`), 4.29/1.03/0.87× unsheared and
-/// 0.58/0.68/1.06× sheared. The variance table's: 2.14/1.80/2.38× and 0.91/1.03/1.68× over the 2D
+/// lattice on the xu plane (`xuyv-lattice`) is 1.50/1.44/1.67× unsheared and 0.64/0.82/1.17× sheared
+/// at N = 64, 256, 1024; over the 4D Korobov lattice (`lattice`), 4.85/1.07/0.86× unsheared and
+/// 0.66/0.71/1.06× sheared. The variance table's: 2.14/1.80/2.38× and 0.91/1.03/1.68× over the 2D
 /// lattice, 6.92/1.33/1.23× and 0.94/0.88/1.51× over the 4D one. A lattice's spectrum is 0 off its
 /// dual lattice, whose nearest points lie about sqrt(N) out, so it darkens far more of the wedge than
 /// a spectrum held near 1 outside its dark region can; how much depends on how the dual lattice sits

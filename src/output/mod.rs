@@ -61,6 +61,8 @@ where
             .and_then(|_| w.flush())
             .map_err(|e| Error::io("write", path, e))?;
     }
+    // An interrupt that came while it was written removes it: the output does not appear after it.
+    interrupt::yield_to_interrupt();
     tmp.persist(path)
         .map_err(|e| Error::io("write", path, e.error))?;
     made.keep();

@@ -71,6 +71,17 @@ const CLASSICAL: [&str; 5] = [
     "lattice",
 ];
 
+/// The MSE of the classical sampler `name` on `subject` at N = 256 with the exact oracle.
+fn classical_mse(name: &str, subject: &Subject, tables: &TableCache) -> ConvergePoint {
+    mse(
+        &SamplerSpec::Classical(name.into()),
+        subject,
+        256,
+        1.0,
+        tables,
+    )
+}
+
 /// On a single-depth (hairline) pixel, oracle-sheared padded MJ beats every classical sampler by more
 /// than 3 combined standard errors at N = 256; the wrap-around shear does not.
 #[test]
@@ -95,13 +106,7 @@ fn sheared_sampling_wins_on_the_hairline_pixel() {
     );
     let mut best = f64::INFINITY;
     for name in CLASSICAL {
-        let c = mse(
-            &SamplerSpec::Classical(name.into()),
-            subject,
-            256,
-            1.0,
-            &tables,
-        );
+        let c = classical_mse(name, subject, &tables);
         let z = z_below(&sheared, &c);
         assert!(
             z > 3.0,
@@ -235,16 +240,7 @@ fn sheared_hairline_degrades_with_oracle_error() {
     let exact = mse(&spec, subject, 256, 1.0, &tables);
     let classical: Vec<(&str, ConvergePoint)> = CLASSICAL
         .iter()
-        .map(|&name| {
-            let c = mse(
-                &SamplerSpec::Classical(name.into()),
-                subject,
-                256,
-                1.0,
-                &tables,
-            );
-            (name, c)
-        })
+        .map(|&name| (name, classical_mse(name, subject, &tables)))
         .collect();
     for scale in [0.75, 1.25] {
         let off = mse(&spec, subject, 256, scale, &tables);

@@ -569,7 +569,7 @@ impl Target {
             .map_err(|e| match e {
                 Error::Input(m) if n < SMALL_N && !matches!(self, Target::Variance(_)) => {
                     match (n + 1..=4 * SMALL_N)
-                        .find(|&m| self.grid_within(m, self.fit_radius(m)).is_ok())
+                        .find(|&larger| self.grid_within(larger, self.fit_radius(larger)).is_ok())
                     {
                         Some(smallest) => Error::Input(format!(
                         "{m}; the smallest N above {n} at which this target builds is {smallest}"

@@ -2,8 +2,9 @@
 //! shipped target at N = 256, stability on degenerate starts and extreme targets, determinism.
 
 use anisospec::optimize::loss::{Objective, Repulsion, Term};
+use anisospec::optimize::solver::TIME_LIMIT_STOP;
 use anisospec::optimize::{
-    metrics, optimize_set, optimize_sets, Limits, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
+    metrics, optimize_set, optimize_sets, Limits, SetReport, Setup, Strata, DEFAULT_ANNULAR_WEIGHT,
     DEFAULT_REPULSION,
 };
 use anisospec::output::write_npy;
@@ -13,6 +14,25 @@ use anisospec::spectrum::Method;
 use anisospec::targets::Target;
 use rand::Rng as _;
 use std::path::{Path, PathBuf};
+
+/// Panics unless every run of `reports` stopped by its own rule (the iteration limit, convergence or
+/// a round without progress) and not by the wall clock: a run cut short by a slow machine is not the
+/// run a test describes, and its result depends on the machine's speed.
+fn assert_not_time_limited(what: &str, reports: &[SetReport]) {
+    for r in reports {
+        eprintln!(
+            "{what}, set {}: {} iterations, {}",
+            r.set, r.iterations, r.stop
+        );
+        assert!(
+            !r.stop.starts_with(TIME_LIMIT_STOP),
+            "{what}, set {}: stopped by the clock after {} iterations ({})",
+            r.set,
+            r.iterations,
+            r.stop
+        );
+    }
+}
 
 fn shipped(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -392,6 +412,7 @@ fn shipped_targets_fit_at_256() {
         };
         let obj = setup.objective().unwrap();
         let (pts, reports) = optimize_sets(&setup, sets, 2024, &|_| {}).unwrap();
+        assert_not_time_limited(name, &reports);
         assert!(reports
             .iter()
             .all(|r| r.loss.is_finite() && r.loss < r.initial_loss));
@@ -443,6 +464,7 @@ fn degenerate_starts_end_in_a_finite_report() {
     for (name, start) in [("one cell", cell), ("duplicates", dup), ("all equal", same)] {
         let (set, rep) =
             optimize_set(&obj, &start, &limits, false, 0, &mut rng::stream(6, 0)).unwrap();
+        assert_not_time_limited(name, std::slice::from_ref(&rep));
         assert!(
             set.iter().all(|c| c.is_finite() && (0.0..1.0).contains(c)),
             "{name}"
@@ -499,6 +521,7 @@ fn extreme_targets_end_in_a_clear_report() {
         annular_weight: DEFAULT_ANNULAR_WEIGHT,
     };
     let (_, reports) = optimize_sets(&setup, 2, 1, &|_| {}).unwrap();
+    assert_not_time_limited("zero-width hairline", &reports);
     assert!(
         reports
             .iter()
@@ -536,10 +559,13 @@ fn same_seed_same_bits_whatever_the_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| optimize_sets(&setup, 3, 9, &|_| {}).unwrap().0)
+            .install(|| optimize_sets(&setup, 3, 9, &|_| {}).unwrap())
     };
-    let one = run(1);
-    assert_eq!(one, run(2));
+    let (one, reports) = run(1);
+    assert_not_time_limited("one thread", &reports);
+    let (two, reports) = run(2);
+    assert_not_time_limited("two threads", &reports);
+    assert_eq!(one, two);
     // The Latin constraint held: x and y are N-stratified in every set.
     for set in 0..3 {
         for d in 0..2 {
@@ -636,6 +662,7 @@ fn a_stationary_start_is_left() {
         };
         let obj = setup.objective().unwrap();
         let (pts, reports) = optimize_sets(&setup, 1, 1, &|_| {}).unwrap();
+        assert_not_time_limited(init, &reports);
         let fit = metrics::fit(&pts, Projection::XY, &obj.terms[0].grid, Method::Exact);
         assert_eq!(reports[0].nudged, nudged, "{init}");
         // The fit criteria of issue 5 (as in shipped_targets_fit_at_256).

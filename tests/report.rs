@@ -34,7 +34,7 @@ fn study(ns: &[usize]) -> String {
     format!(
         r#"ns = {ns:?}
 realizations = {REALIZATIONS}
-seed = 7
+seed = {SEED}
 classical = ["padded-jittered"]
 sheared = ["padded-mj"]
 shear_modes = ["transported"]
@@ -97,10 +97,46 @@ fn compare(dir: &Path, name: &str, config: &str, cache: &Path) -> PathBuf {
 /// Whether `stderr` can be the standard error of a mean `mse` of R = [`REALIZATIONS`] squared
 /// errors: at least 0 (0 when every estimate errs alike, as a table's centred strata do on the edge
 /// with the exact oracle), and at most `mse · sqrt(R / (R − 1))`, the bound for non-negative samples
-/// (Σ(x − m)² ≤ Σx² ≤ (Σx)² = R²m², so s² ≤ R²m²/(R − 1) and s/sqrt(R) ≤ that).
+/// (Σ(x − m)² ≤ Σx² ≤ (Σx)² = R²m², so s² ≤ R²m²/(R − 1) and s/sqrt(R) ≤ that). Only a necessary
+/// condition, which any non-negative pair meets: the rows [`recomputed`] covers are checked exactly.
 fn stderr_fits(mse: f64, stderr: f64) -> bool {
     let r = REALIZATIONS as f64;
     (0.0..=mse * (r / (r - 1.0)).sqrt()).contains(&stderr)
+}
+
+/// The seed of every study of this file (see [`study`]).
+const SEED: u64 = 7;
+
+/// The MSE and its standard error of `sampler` on `f` at `n` points against `integral`, recomputed
+/// from the R = [`REALIZATIONS`] estimates themselves, drawn as `converge::measure` draws them (its
+/// module doc: realization `r` at size `N` takes its set from `rng::substream(seed, r, 3N)` and its
+/// toroidal shift from `rng::substream(seed, r, 3N + 1)`; no random placement in compare), each
+/// estimate the points' sum in order over `N`. The mean of the squared errors and the two-pass
+/// sample standard deviation over `sqrt(R)` are taken in the order `measure` takes them, so a
+/// correct report holds these bits exactly.
+fn recomputed(
+    sampler: &dyn anisospec::samplers::Sampler,
+    f: &dyn anisospec::integrands::Integrand,
+    n: usize,
+    integral: f64,
+) -> (f64, f64) {
+    use rand::Rng as _;
+    let dims = sampler.dims();
+    let key = 3 * n as u64;
+    let squares: Vec<f64> = (0..REALIZATIONS as u64)
+        .map(|r| {
+            let mut shift_rng = anisospec::rng::substream(SEED, r, key + 1);
+            let shift: Vec<f64> = (0..dims).map(|_| shift_rng.random::<f64>()).collect();
+            let set =
+                sampler.generate_shifted(n, &mut anisospec::rng::substream(SEED, r, key), &shift);
+            let sum: f64 = set.chunks_exact(dims).map(|p| f.eval(p)).sum();
+            (sum / n as f64 - integral).powi(2)
+        })
+        .collect();
+    let r = REALIZATIONS as f64;
+    let mean = squares.iter().sum::<f64>() / r;
+    let variance = squares.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (r - 1.0);
+    (mean, (variance / r).sqrt())
 }
 
 /// The N a sampler of the study makes when asked for `n` (a table is built for exactly `n`).
@@ -371,6 +407,8 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
     // Each row carries its subject's integral: the edge's exact value, and a pixel's reference (a
     // radiance, positive).
     let edge = anisospec::integrands::parse("sheared:s=0.5,c=0.7@xu").unwrap();
+    let pixel = anisospec::integrands::parse(integrands[1][1].trim_matches('`')).unwrap();
+    let mut recomputed_rows = 0;
     for p in &points {
         if p.subject == EDGE {
             assert_eq!(p.integral, edge.reference().value, "{p:?}");
@@ -392,6 +430,35 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             );
             assert_eq!(row["family"], family);
             assert!(p.mse > 0.0 && stderr_fits(p.mse, p.mse_stderr), "{p:?}");
+            // The rows whose sampler the test can build from the config alone (the pixel's
+            // sheared sampler takes the oracle's shear, a table its optimization) are recomputed
+            // from their estimates: the MSE and its standard error, bit for bit.
+            let sampler_here: Option<Box<dyn anisospec::samplers::Sampler>> =
+                match (family, p.subject == EDGE) {
+                    ("classical", _) => {
+                        Some(anisospec::samplers::build("padded-jittered", 4).unwrap())
+                    }
+                    ("sheared", true) => Some(Box::new(
+                        anisospec::samplers::Sheared::new(
+                            anisospec::samplers::build("padded-mj", 4).unwrap(),
+                            0.5,
+                            0.5,
+                            anisospec::points::shear::ShearMode::Transported,
+                        )
+                        .unwrap(),
+                    )),
+                    _ => None,
+                };
+            if let Some(sampler_here) = sampler_here {
+                let f = if p.subject == EDGE { &edge } else { &pixel };
+                let (mse, stderr) = recomputed(sampler_here.as_ref(), f.as_ref(), p.n, p.integral);
+                assert_eq!(
+                    (p.mse.to_bits(), p.mse_stderr.to_bits()),
+                    (mse.to_bits(), stderr.to_bits()),
+                    "{p:?}: recomputed MSE {mse:e} ± {stderr:e}"
+                );
+                recomputed_rows += 1;
+            }
             assert!(p.seconds_per_estimate > 0.0, "{p:?}");
             // Only a table has a one-off set-up: its own optimization at that N.
             assert_eq!(p.setup_seconds > 0.0, family == "optimized", "{p:?}");
@@ -417,6 +484,8 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             assert!(lo <= slope && slope <= hi, "{slope} outside [{lo}, {hi}]");
         }
     }
+    // Padded jittered on both integrands and the sheared sampler on the edge: half the rows.
+    assert_eq!(recomputed_rows, 3 * ns.len());
 
     // The arrays [integrand, sampler, N] hold the CSV's numbers bit for bit (the CSV prints the
     // shortest text that reads back as the same f64).
@@ -574,6 +643,27 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
                 assert_eq!(r["moved_by_oracle"], "true", "{r:?}");
                 let (mse, stderr) = (num(r, "mse"), num(r, "mse_stderr"));
                 assert!(mse > 0.0 && stderr_fits(mse, stderr), "{r:?}");
+                // The sheared sampler on the edge, its shear 0.5 scaled by (1 + error) as the
+                // sweep scales it: recomputed from its estimates, bit for bit.
+                if subject == EDGE && sampler.starts_with("padded-mj sheared") {
+                    let shear = 0.5 * (1.0 + e);
+                    let sheared = anisospec::samplers::Sheared::new(
+                        anisospec::samplers::build("padded-mj", 4).unwrap(),
+                        shear,
+                        shear,
+                        anisospec::points::shear::ShearMode::Transported,
+                    )
+                    .unwrap();
+                    let n = usable(sampler, nmax);
+                    let again = recomputed(&sheared, edge.as_ref(), n, edge.reference().value);
+                    assert_eq!(
+                        (mse.to_bits(), stderr.to_bits()),
+                        (again.0.to_bits(), again.1.to_bits()),
+                        "{r:?}: recomputed MSE {:e} ± {:e}",
+                        again.0,
+                        again.1
+                    );
+                }
                 if e == 0.0 {
                     let study = studies
                         .iter()

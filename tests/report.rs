@@ -139,6 +139,29 @@ fn recomputed(
     (mean, (variance / r).sqrt())
 }
 
+/// The study's sheared sampler, transported padded MJ, sheared by `shear` on both axes.
+fn sheared_mj(shear: f64) -> anisospec::samplers::Sheared {
+    anisospec::samplers::Sheared::new(
+        anisospec::samplers::build("padded-mj", 4).unwrap(),
+        shear,
+        shear,
+        anisospec::points::shear::ShearMode::Transported,
+    )
+    .unwrap()
+}
+
+/// The shear compare gives a hairline pixel's samplers: the oracle's `sx` at the pixel of `label`
+/// ("hairline pixel (px,py)") in the default scene.
+fn hairline_pixel_shear(label: &str) -> f64 {
+    let (px, py) = label
+        .strip_prefix("hairline pixel (")
+        .and_then(|rest| rest.strip_suffix(')'))
+        .and_then(|xy| xy.split_once(','))
+        .unwrap_or_else(|| panic!("'{label}' is not a hairline pixel's label"));
+    let scene = anisospec::render::Scene::load(None).unwrap();
+    anisospec::render::oracle::oracle_pixel(&scene, px.parse().unwrap(), py.parse().unwrap()).sx
+}
+
 /// The N a sampler of the study makes when asked for `n` (a table is built for exactly `n`).
 fn usable(sampler: &str, n: usize) -> usize {
     match sampler.split(' ').next().unwrap() {
@@ -408,6 +431,14 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
     // radiance, positive).
     let edge = anisospec::integrands::parse("sheared:s=0.5,c=0.7@xu").unwrap();
     let pixel = anisospec::integrands::parse(integrands[1][1].trim_matches('`')).unwrap();
+    // The samplers' shear of each integrand: the edge's configured 0.5, the pixel's oracle shear.
+    let samplers_shear = |subject: &str| {
+        if subject == EDGE {
+            0.5
+        } else {
+            hairline_pixel_shear(subject)
+        }
+    };
     let mut recomputed_rows = 0;
     for p in &points {
         if p.subject == EDGE {
@@ -430,25 +461,14 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             );
             assert_eq!(row["family"], family);
             assert!(p.mse > 0.0 && stderr_fits(p.mse, p.mse_stderr), "{p:?}");
-            // The rows whose sampler the test can build from the config alone (the pixel's
-            // sheared sampler takes the oracle's shear, a table its optimization) are recomputed
-            // from their estimates: the MSE and its standard error, bit for bit.
-            let sampler_here: Option<Box<dyn anisospec::samplers::Sampler>> =
-                match (family, p.subject == EDGE) {
-                    ("classical", _) => {
-                        Some(anisospec::samplers::build("padded-jittered", 4).unwrap())
-                    }
-                    ("sheared", true) => Some(Box::new(
-                        anisospec::samplers::Sheared::new(
-                            anisospec::samplers::build("padded-mj", 4).unwrap(),
-                            0.5,
-                            0.5,
-                            anisospec::points::shear::ShearMode::Transported,
-                        )
-                        .unwrap(),
-                    )),
-                    _ => None,
-                };
+            // The rows whose sampler the test can build (all but a table's, which takes its
+            // optimization) are recomputed from their estimates: the MSE and its standard error,
+            // bit for bit.
+            let sampler_here: Option<Box<dyn anisospec::samplers::Sampler>> = match family {
+                "classical" => Some(anisospec::samplers::build("padded-jittered", 4).unwrap()),
+                "sheared" => Some(Box::new(sheared_mj(samplers_shear(&p.subject)))),
+                _ => None,
+            };
             if let Some(sampler_here) = sampler_here {
                 let f = if p.subject == EDGE { &edge } else { &pixel };
                 let (mse, stderr) = recomputed(sampler_here.as_ref(), f.as_ref(), p.n, p.integral);
@@ -484,8 +504,8 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
             assert!(lo <= slope && slope <= hi, "{slope} outside [{lo}, {hi}]");
         }
     }
-    // Padded jittered on both integrands and the sheared sampler on the edge: half the rows.
-    assert_eq!(recomputed_rows, 3 * ns.len());
+    // Padded jittered and the sheared sampler on both integrands: all rows but the table's.
+    assert_eq!(recomputed_rows, 4 * ns.len());
 
     // The arrays [integrand, sampler, N] hold the CSV's numbers bit for bit (the CSV prints the
     // shortest text that reads back as the same f64).
@@ -622,6 +642,7 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
     );
     assert_eq!(robustness[0], expect_header);
     let mut table_rows = robustness[1..].iter();
+    let mut recomputed_sweep = 0;
     for (subject, _) in &subjects {
         for (sampler, _) in followers {
             let reference = best_classical(subject, at_max);
@@ -643,19 +664,19 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
                 assert_eq!(r["moved_by_oracle"], "true", "{r:?}");
                 let (mse, stderr) = (num(r, "mse"), num(r, "mse_stderr"));
                 assert!(mse > 0.0 && stderr_fits(mse, stderr), "{r:?}");
-                // The sheared sampler on the edge, its shear 0.5 scaled by (1 + error) as the
-                // sweep scales it: recomputed from its estimates, bit for bit.
-                if subject == EDGE && sampler.starts_with("padded-mj sheared") {
-                    let shear = 0.5 * (1.0 + e);
-                    let sheared = anisospec::samplers::Sheared::new(
-                        anisospec::samplers::build("padded-mj", 4).unwrap(),
-                        shear,
-                        shear,
-                        anisospec::points::shear::ShearMode::Transported,
-                    )
-                    .unwrap();
+                // The sheared sampler, its shear scaled by (1 + error) as the sweep scales it:
+                // recomputed from its estimates, bit for bit.
+                if sampler.starts_with("padded-mj sheared") {
+                    let sheared = sheared_mj(samplers_shear(subject) * (1.0 + e));
+                    let (f, integral) = if subject == EDGE {
+                        (&edge, edge.reference().value)
+                    } else {
+                        let p = points.iter().find(|p| &p.subject == subject).unwrap();
+                        (&pixel, p.integral)
+                    };
                     let n = usable(sampler, nmax);
-                    let again = recomputed(&sheared, edge.as_ref(), n, edge.reference().value);
+                    let again = recomputed(&sheared, f.as_ref(), n, integral);
+                    recomputed_sweep += 1;
                     assert_eq!(
                         (mse.to_bits(), stderr.to_bits()),
                         (again.0.to_bits(), again.1.to_bits()),
@@ -699,6 +720,8 @@ fn check_report(out: &Path, ns: &[usize]) -> Vec<Point> {
         }
     }
     assert_eq!(table_rows.next(), None);
+    // The sheared sampler's rows on both integrands, at every error.
+    assert_eq!(recomputed_sweep, subjects.len() * SHEAR_ERRORS.len());
     let plots: Vec<&str> = robustness_section
         .links
         .iter()

@@ -819,3 +819,80 @@ fn binary_lists_integrands_and_exits_2_on_bad_input() {
     );
     assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 5);
 }
+
+/// The standard errors behind the z-tests are the right size (a z-test with an inflated standard
+/// error passes anything). The prediction against the measurement, repeated over `M = 32`
+/// independent seeds (jittered, N = 16, on a Gaussian; prediction R = 150, measurement R = 4000):
+///
+/// - `z_i = (measured_i − predicted_i) / sqrt(se_meas_i² + se_pred_i²)` is standard normal for a
+///   right prediction with right standard errors, so `Σ z_i²` is chi²(M): its mean square lies in
+///   `[χ²_{0.0005}(32), χ²_{0.9995}(32)] / 32 = [0.374, 2.031]` with probability 99.9 %;
+/// - across seeds, the measured MSEs' sample variance `s²` over the mean reported `se_meas²` is
+///   `χ²(M − 1) / (M − 1)`, in `[χ²_{0.0005}(31), χ²_{0.9995}(31)] / 31 = [0.367, 2.051]` at 99.9 %;
+///   and the same for the predictions and their reported `se_pred²`.
+///
+/// The quantiles assume normal estimates with known variances. The departures are small beside
+/// intervals a factor of 2.7 and 5.5 wide: the means of R values are near normal (an MSE's skewness
+/// is at most about `sqrt(8 / R) = 0.04` for Gaussian errors), each `se²` is estimated to about
+/// `sqrt(14 / R)` relative (0.06 for the MSE, 0.3 for the prediction) but the tests average 32 of
+/// them, and the tail's truncation (at K = 64 = 4N) moves the prediction by far less than `se_pred`.
+/// Standard errors scaled by 3 give a mean square near 1/9, scaled by 1/3 near 9: both fail, as do
+/// the scatter checks (each tried with the scale applied to the reported errors, then reverted).
+#[test]
+fn the_z_tests_standard_errors_are_calibrated() {
+    let f = parse("gaussian:sigma=0.15").unwrap();
+    let s = sampler("jittered", 2);
+    let n = 16;
+    let seeds = 32;
+    let (mut z2, mut measured, mut predicted) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..seeds {
+        let vc = VarianceConfig {
+            res: 32,
+            res_per_n: Some(4),
+            realizations: 150,
+            cones: 1,
+            seed: 1000 + 2 * i,
+            method: Method::Exact,
+        };
+        let p = &predict(s.as_ref(), f.as_ref(), &[n], &vc).unwrap().points[0];
+        let cfg = ConvergeConfig {
+            realizations: 4000,
+            seed: 1001 + 2 * i,
+            random_placement: false,
+        };
+        let m = measure(s.as_ref(), f.as_ref(), n, &cfg).unwrap();
+        assert!(
+            p.stderr > 0.0 && m.mse_stderr > 0.0,
+            "seed {i}: {p:?} {m:?}"
+        );
+        let z = (m.mse - p.variance) / (p.stderr.powi(2) + m.mse_stderr.powi(2)).sqrt();
+        z2.push(z * z);
+        measured.push((m.mse, m.mse_stderr));
+        predicted.push((p.variance, p.stderr));
+    }
+    let m = seeds as f64;
+    let mean_square = z2.iter().sum::<f64>() / m;
+    // Sample variance of the estimates over the mean reported squared standard error.
+    let scatter_ratio = |xs: &[(f64, f64)]| {
+        let mean = xs.iter().map(|x| x.0).sum::<f64>() / m;
+        let var = xs.iter().map(|x| (x.0 - mean).powi(2)).sum::<f64>() / (m - 1.0);
+        let reported = xs.iter().map(|x| x.1 * x.1).sum::<f64>() / m;
+        (var / reported, mean)
+    };
+    let (meas_ratio, meas_mean) = scatter_ratio(&measured);
+    let (pred_ratio, pred_mean) = scatter_ratio(&predicted);
+    eprintln!(
+        "mean z² {mean_square:.3} over {seeds} seeds; scatter / reported se²: measured {meas_ratio:.3} (mean MSE {meas_mean:.4e}), predicted {pred_ratio:.3} (mean {pred_mean:.4e}); se_meas {:.2e}, se_pred {:.2e}",
+        measured[0].1, predicted[0].1
+    );
+    assert!(
+        (0.374..=2.031).contains(&mean_square),
+        "mean z² = {mean_square} outside chi²(32)/32's 99.9 % interval"
+    );
+    for (what, ratio) in [("measured", meas_ratio), ("predicted", pred_ratio)] {
+        assert!(
+            (0.367..=2.051).contains(&ratio),
+            "{what}: scatter / reported se² = {ratio} outside chi²(31)/31's 99.9 % interval"
+        );
+    }
+}

@@ -573,19 +573,34 @@ fn random_placement_keeps_the_rate() {
     }
 }
 
+/// Integrand specs that every entry point refuses, each with a phrase its message must hold: an
+/// unknown name, a bad value, a disc outside the unit square (in x and in y), a fan with its shears
+/// out of order, an unknown key.
+const BAD_SPECS: [(&str, &str); 6] = [
+    ("blob", "unknown integrand 'blob'"),
+    ("gaussian:sigma=-0.1", "sigma=-0.1"),
+    ("disc:r=0.3,cx=0.9", "outside the domain"),
+    ("disc:r=0.4,cy=0.95", "outside the domain"),
+    ("fan:s0=0.8,s1=0.2", "s0=0.8 > s1=0.2"),
+    ("step:angle=3", "unknown key 'angle'"),
+];
+
+/// Runs `refuse` (named `entry` in messages) on every spec of [`BAD_SPECS`]; it returns the exit
+/// code and the message: each must be a usage error (exit code 2) whose message names the fault.
+fn assert_bad_specs_refused(entry: &str, refuse: impl Fn(&str) -> (Option<i32>, String)) {
+    for (spec, says) in BAD_SPECS {
+        let (code, message) = refuse(spec);
+        assert_eq!(code, Some(2), "{entry} {spec}: {message}");
+        assert!(message.contains(says), "{entry} {spec}: {message}");
+    }
+}
+
 #[test]
 fn bad_input_is_a_usage_error_with_exit_code_2() {
-    for (spec, says) in [
-        ("blob", "unknown integrand 'blob'"),
-        ("gaussian:sigma=-0.1", "sigma=-0.1"),
-        ("disc:r=0.3,cx=0.9", "outside the domain"),
-        ("fan:s0=0.8,s1=0.2", "s0=0.8 > s1=0.2"),
-        ("step:angle=3", "unknown key 'angle'"),
-    ] {
+    assert_bad_specs_refused("parse", |spec| {
         let e = parse(spec).err().unwrap_or_else(|| panic!("{spec} parsed"));
-        assert_eq!(e.exit_code(), 2, "{spec}");
-        assert!(e.to_string().contains(says), "{spec}: {e}");
-    }
+        (Some(e.exit_code()), e.to_string())
+    });
     let cfg = ConvergeConfig {
         realizations: 10,
         seed: 1,
@@ -725,12 +740,7 @@ fn commands_write_csv_and_plot_and_refuse_bad_input() {
 
     // Bad input: exit code 2 and no output written.
     let bad = dir.path().join("bad.csv");
-    for spec in [
-        "blob",
-        "gaussian:sigma=-1",
-        "disc:r=0.4,cy=0.95",
-        "fan:s0=1,s1=0",
-    ] {
+    assert_bad_specs_refused("converge", |spec| {
         let e = converge_run(&ConvergeArgs {
             integrand: spec.into(),
             output: Some(bad.clone()),
@@ -738,8 +748,8 @@ fn commands_write_csv_and_plot_and_refuse_bad_input() {
             ..args.clone()
         })
         .unwrap_err();
-        assert_eq!(e.exit_code(), 2, "{spec}: {e}");
-    }
+        (Some(e.exit_code()), e.to_string())
+    });
     let e = converge_run(&ConvergeArgs {
         sampler: vec!["random".into(), "nosuch".into()],
         output: Some(bad.clone()),
@@ -768,13 +778,8 @@ fn binary_lists_integrands_and_exits_2_on_bad_input() {
     }
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("conv.csv");
-    for (spec, says) in [
-        ("blob", "unknown integrand"),
-        ("gaussian:sigma=-0.1", "sigma"),
-        ("disc:r=0.3,cx=0.9", "outside the domain"),
-        ("fan:s0=0.7,s1=0.3", "s0=0.7 > s1=0.3"),
-    ] {
-        for cmd in ["converge", "variance"] {
+    for cmd in ["converge", "variance"] {
+        assert_bad_specs_refused(cmd, |spec| {
             let out = Command::new(bin)
                 .args([
                     cmd,
@@ -789,11 +794,12 @@ fn binary_lists_integrands_and_exits_2_on_bad_input() {
                 .arg(&csv)
                 .output()
                 .unwrap();
-            let err = String::from_utf8_lossy(&out.stderr);
-            assert_eq!(out.status.code(), Some(2), "{cmd} {spec}: {err}");
-            assert!(err.contains(says), "{cmd} {spec}: {err}");
-            assert!(!csv.exists());
-        }
+            assert!(!csv.exists(), "{cmd} {spec} wrote {}", csv.display());
+            (
+                out.status.code(),
+                String::from_utf8_lossy(&out.stderr).into_owned(),
+            )
+        });
     }
     // A good run writes the CSV.
     let out = Command::new(bin)

@@ -7,14 +7,84 @@
 //! a right rate, while the rates being told apart differ by at least 0.5 (30σ). The fit's own standard
 //! error is asserted to stay below 0.05 so that the test keeps this power.
 
-use anisospec::converge::{converge, measure, ConvergeConfig};
-use anisospec::integrands::parse;
+use anisospec::converge::{converge, measure, ConvergeConfig, ConvergePoint};
+use anisospec::integrands::{parse, Integrand};
 use anisospec::samplers::{self, Sampler};
 use anisospec::spectrum::Method;
-use anisospec::variance::{predict, VarianceConfig};
+use anisospec::variance::{predict, VarianceConfig, VariancePoint};
 
 fn sampler(name: &str, dims: usize) -> Box<dyn Sampler> {
     samplers::build(name, dims).unwrap()
+}
+
+/// The z-score of a prediction against a measurement over `r_meas` realizations, after checking
+/// that the measurement's standard error has the size its errors give, so that `|z| ≤ 3` cannot
+/// pass by an inflated one. The relative standard error of an MSE is `sqrt((κ − 1) / R)`, `κ` the
+/// kurtosis of the errors, so `κ̂ = 1 + R (se / MSE)²` recovers `κ`. The errors here are near
+/// Gaussian (`κ = 3`; most are sums of many independent pieces, points or strata): measured 2.74 to
+/// 3.57 over every z-test of this file, with `κ̂`'s own noise about `2 sqrt(14 / R)` (0.12 at R = 4000, for
+/// Gaussian errors). `2 ≤ κ̂ ≤ 5` holds the standard error within 0.71 to 1.41 times its
+/// Gaussian-error size `MSE sqrt(2 / R)`; one scaled by 3 (`κ̂ ≥ 17`) or by 1/3 (`κ̂ ≤ 1.3`) fails.
+fn z_score(p: &VariancePoint, m: &ConvergePoint, r_meas: usize) -> f64 {
+    let kurtosis = 1.0 + r_meas as f64 * (m.mse_stderr / m.mse).powi(2);
+    assert!(
+        (2.0..=5.0).contains(&kurtosis),
+        "N = {}: the measured MSE {:e} ± {:e} over R = {r_meas} implies an error kurtosis {kurtosis}",
+        m.n,
+        m.mse,
+        m.mse_stderr
+    );
+    (p.variance - m.mse) / (p.stderr.powi(2) + m.mse_stderr.powi(2)).sqrt()
+}
+
+/// The standard error of the random sampler's prediction at `n` points over `r_pred` realizations,
+/// in closed form, for a 2D integrand `f` on the `res × res` grid. With `w_k = |f̂(k)|²` and
+/// `h(d) = Σ_k w_k e^{−2πi k·d}` (`k ≠ 0` on the grid), a realization's sum is
+/// `V = (1/N) Σ_k w_k P(k) = Σ_k w_k / N + (1/N²) Σ_{j≠l} h(x_j − x_l)`, a degenerate U-statistic
+/// of the `N` independent uniform points: `Var V = 4 C(N, 2) E[(Re h)²] / N⁴`, with
+/// `E[(Re h)²] = (Σ_k w_k² + Σ_k w_k w_{−k}) / 2` (`w_{−k}` = 0 where `−k` is off the grid).
+fn random_prediction_stderr(f: &dyn Integrand, n: usize, res: usize, r_pred: usize) -> f64 {
+    let half = (res / 2) as i64;
+    let w = |k1: i64, k2: i64| {
+        if (k1, k2) == (0, 0) || k1.max(k2) >= half || k1.min(k2) < -half {
+            0.0
+        } else {
+            f.fourier(&[k1, k2]).unwrap().norm_sqr()
+        }
+    };
+    let mut re_h2 = 0.0;
+    for k2 in -half..half {
+        for k1 in -half..half {
+            let wk = w(k1, k2);
+            re_h2 += wk * (wk + w(-k1, -k2)) / 2.0;
+        }
+    }
+    let nf = n as f64;
+    (2.0 * nf * (nf - 1.0) * re_h2 / nf.powi(4) / r_pred as f64).sqrt()
+}
+
+/// Checks a random sampler's reported prediction standard error (`Var f` exact: no tail error)
+/// against [`random_prediction_stderr`]. The reported one is `s / sqrt(R)`, `s²` the sample
+/// variance of `R` realizations of `V`, whose relative standard deviation is about
+/// `sqrt((κ_V − 1) / R)`, `κ_V` the kurtosis of `V`. Random points' `P(k)` is near exponential
+/// with mean 1, independently over pairs `±k`, so `V` is near a weighted sum of centred
+/// exponentials, of kurtosis at most 9 (one term): at R = 1000 and 4 of its standard deviations,
+/// `s² / Var V ∈ 1 ± 4 sqrt(8 / 1000) = [0.64, 1.36]`, the standard error within 0.80 to 1.17
+/// times its expected size. One scaled by 3 or by 1/3 fails.
+fn assert_random_prediction_stderr(p: &VariancePoint, f: &dyn Integrand, r_pred: usize) {
+    assert_eq!(p.tail_stderr, 0.0);
+    let expected = random_prediction_stderr(f, p.n, p.res, r_pred);
+    let ratio = p.stderr / expected;
+    eprintln!(
+        "random N={}: prediction stderr {:.3e}, closed form {expected:.3e}, ratio {ratio:.3}",
+        p.n, p.stderr
+    );
+    assert!(
+        (0.80..=1.17).contains(&ratio),
+        "N = {}: prediction stderr {:e} is {ratio} times its closed form {expected:e}",
+        p.n,
+        p.stderr
+    );
 }
 
 const NS: [usize; 5] = [16, 64, 256, 1024, 4096];
@@ -94,13 +164,16 @@ fn prediction_meets_measurement() {
                     method: Method::Exact,
                 };
                 let p = &predict(s.as_ref(), f.as_ref(), &[n], &vc).unwrap().points[0];
+                if name == "random" {
+                    assert_random_prediction_stderr(p, f.as_ref(), vc.realizations);
+                }
                 let cfg = ConvergeConfig {
                     realizations: 20000,
                     seed: 32,
                     random_placement: false,
                 };
                 let m = measure(s.as_ref(), f.as_ref(), n, &cfg).unwrap();
-                let z = (p.variance - m.mse) / (p.stderr.powi(2) + m.mse_stderr.powi(2)).sqrt();
+                let z = z_score(p, &m, cfg.realizations);
                 eprintln!(
                     "{name:>9} {spec:<20} N={n:<4} predicted {:.4e} ± {:.1e} (tail {:.1e})  measured {:.4e} ± {:.1e}  z = {z:+.2}",
                     p.variance,
@@ -155,7 +228,7 @@ fn a_sheared_sampler_is_predicted_in_its_patterns_frame() {
             random_placement: false,
         };
         let m = measure(s.as_ref(), f.as_ref(), n, &cfg).unwrap();
-        let z = (p.variance - m.mse) / (p.stderr.powi(2) + m.mse_stderr.powi(2)).sqrt();
+        let z = z_score(p, &m, cfg.realizations);
         eprintln!(
             "shear {shear}: predicted {:.4e} ± {:.1e} (tail {:.1e})  measured {:.4e} ± {:.1e}  z = {z:+.2}",
             p.variance,
@@ -195,7 +268,7 @@ fn a_sheared_sampler_is_predicted_on_both_planes_and_in_both_modes() {
         let s = samplers::Sheared::new(sampler("padded-mj", 4), 0.4, 0.6, mode).unwrap();
         let p = &predict(&s, f.as_ref(), &[n], &vc).unwrap().points[0];
         let m = measure(&s, f.as_ref(), n, &cfg).unwrap();
-        let z = (p.variance - m.mse) / (p.stderr.powi(2) + m.mse_stderr.powi(2)).sqrt();
+        let z = z_score(p, &m, cfg.realizations);
         eprintln!(
             "{mode:?}: predicted {:.4e} ± {:.1e}  measured {:.4e} ± {:.1e}  z = {z:+.2}",
             p.variance, p.stderr, m.mse, m.mse_stderr
@@ -385,7 +458,7 @@ fn prediction_meets_measurement_in_4d_on_two_planes() {
         random_placement: false,
     };
     let m = measure(s.as_ref(), f.as_ref(), 64, &cfg).unwrap();
-    let z = (p.variance - m.mse) / (p.stderr.powi(2) + m.mse_stderr.powi(2)).sqrt();
+    let z = z_score(p, &m, cfg.realizations);
     eprintln!(
         "padded-jittered 4D N=64: predicted {:.4e} ± {:.1e}, measured {:.4e} ± {:.1e}, z = {z:+.2}",
         p.variance, p.stderr, m.mse, m.mse_stderr
@@ -419,7 +492,7 @@ fn prediction_meets_measurement_on_an_overlapping_sum() {
     };
     let m = measure(s.as_ref(), f.as_ref(), 256, &cfg).unwrap();
     let se = (p.stderr.powi(2) + m.mse_stderr.powi(2)).sqrt();
-    let z = (p.variance - m.mse) / se;
+    let z = z_score(p, &m, cfg.realizations);
     let z_grid = (m.mse - p.grid) / se;
     eprintln!(
         "nrooks N=256: predicted {:.4e} ± {:.1e} (tail {:.3e} ± {:.1e}), measured {:.4e} ± {:.1e}, z = {z:+.2}, grid alone z = {z_grid:+.1}",
@@ -662,13 +735,16 @@ fn fan_prediction_meets_measurement() {
             method: Method::nufft(1e-9).unwrap(),
         };
         let p = &predict(s.as_ref(), f.as_ref(), &[64], &vc).unwrap().points[0];
+        if name == "random" {
+            assert_random_prediction_stderr(p, f.as_ref(), vc.realizations);
+        }
         let cfg = ConvergeConfig {
             realizations: 20000,
             seed: 52,
             random_placement: false,
         };
         let m = measure(s.as_ref(), f.as_ref(), 64, &cfg).unwrap();
-        let z = (p.variance - m.mse) / (p.stderr.powi(2) + m.mse_stderr.powi(2)).sqrt();
+        let z = z_score(p, &m, cfg.realizations);
         eprintln!(
             "{name:>9} fan N=64: predicted {:.4e} ± {:.1e} (tail {:.1e}), measured {:.4e} ± {:.1e}, z = {z:+.2}",
             p.variance,

@@ -141,7 +141,7 @@ fn main() -> ExitCode {
         Err(e) if e.is_broken_pipe() => ExitCode::from(141),
         Err(e) => {
             anisospec::output::interrupt::yield_to_interrupt();
-            eprintln!("error: {e}");
+            anisospec::eprintln_best_effort!("error: {e}");
             ExitCode::from(e.exit_code() as u8)
         }
     }

@@ -4114,3 +4114,73 @@ fn a_variance_target_reaches_the_same_level_whatever_its_weight() {
         "weight 5000: {default:e}, weight 1e-6: {tiny:e}"
     );
 }
+
+/// Runs `args` with stderr on `/dev/full`, where every write fails (ENOSPC).
+#[cfg(target_os = "linux")]
+fn anisospec_with_full_stderr(args: &[&str]) -> std::process::Output {
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    Command::new(env!("CARGO_BIN_EXE_anisospec"))
+        .args(args)
+        .stderr(std::process::Stdio::from(full))
+        .output()
+        .unwrap()
+}
+
+/// A standard error that cannot be written (a full disk) costs the run only its messages: the job
+/// is done and the run exits with its own status, 0 with its files written, 2 on bad input (before,
+/// the first message panicked, exit 101, on either path).
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_standard_error_keeps_the_work_and_the_exit_status() {
+    let dir = tempfile::tempdir().unwrap();
+    let pts = dir.path().join("pts.npy");
+    let pts_s = pts.to_str().unwrap();
+    let o = anisospec_with_full_stderr(&[
+        "sample",
+        "--sampler",
+        "jittered",
+        "-n",
+        "16",
+        "--sets",
+        "2",
+        "-o",
+        pts_s,
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{:?}", o.status);
+    assert_eq!(anisospec::points::io::read_points(&pts).unwrap().sets(), 2);
+    // spectrum's messages come after its files are written (and its note of a dark annulus).
+    let spec = dir.path().join("s.npy");
+    let o = anisospec_with_full_stderr(&[
+        "spectrum",
+        "--input",
+        pts_s,
+        "--res",
+        "8",
+        "-o",
+        spec.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{:?}", o.status);
+    let bytes = std::fs::read(&spec).unwrap();
+    assert_eq!(npyz::NpyFile::new(&bytes[..]).unwrap().shape(), &[8, 8]);
+    // An input error (a missing file) and a usage error: exit 2 and no output, the message lost.
+    let out = dir.path().join("never.npy");
+    let out_s = out.to_str().unwrap();
+    let missing = dir.path().join("missing.npy");
+    for args in [
+        &[
+            "spectrum",
+            "--input",
+            missing.to_str().unwrap(),
+            "-o",
+            out_s,
+        ][..],
+        &["sample", "--sampler", "nosuch", "-n", "16", "-o", out_s],
+    ] {
+        let o = anisospec_with_full_stderr(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {:?}", o.status);
+        assert!(!out.exists(), "{args:?}");
+    }
+}

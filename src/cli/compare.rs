@@ -55,7 +55,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     crate::output::check_folder(&cache, cache_source, "cache")?;
     let started = std::time::Instant::now();
     let outcome = compare::run(&config, &args.out, &cache)?;
-    eprintln!(
+    crate::eprintln_best_effort!(
         "compared {} on {} in {:.1} s (report included); report in {}",
         super::counted(
             outcome.studies.len() / outcome.subjects.len().max(1),

@@ -229,7 +229,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
             .flat_map(|s| &s.points)
             .any(|p| crate::compare::report::drawable(p.mse));
         if !drawable {
-            eprintln!(
+            crate::eprintln_best_effort!(
                 "no plot written to {}: every MSE is 0 (the samplers integrate {} exactly at every N), which a log axis cannot show",
                 png.display(),
                 f.name()
@@ -243,7 +243,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
                 .map(|p| p.n.to_string())
                 .collect();
             if !zero.is_empty() {
-                eprintln!(
+                crate::eprintln_best_effort!(
                     "{}: {} has MSE 0 at N = {} (it integrates {} exactly there), which a log axis cannot show: not drawn, and its line breaks there",
                     png.display(),
                     s.sampler,

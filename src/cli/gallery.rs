@@ -166,11 +166,14 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
             write_radial_csv(&dir.join(format!("{stem}_radial.csv")), &profile)?;
             if !dark_noted {
                 if let Some(note) = dark_withheld_note(&profile, method, n) {
-                    eprintln!("{note} (said once for the gallery)");
+                    crate::eprintln_best_effort!("{note} (said once for the gallery)");
                     dark_noted = true;
                 }
             }
-            eprintln!("{stem}: N = {n}, {:.2} s", started.elapsed().as_secs_f64());
+            crate::eprintln_best_effort!(
+                "{stem}: N = {n}, {:.2} s",
+                started.elapsed().as_secs_f64()
+            );
             rows.push((sampler.name(), dims, proj.name(), n, stem));
             // Only the mean goes on the sheets: the rest is dropped now, not held for every sampler.
             spectra.push(spec.mean);
@@ -223,6 +226,6 @@ pub fn run(args: &GalleryArgs) -> Result<()> {
         })
     })?;
     let index = gallery.join(GALLERY_MARKER.file);
-    eprintln!("gallery written to {}", index.display());
+    crate::eprintln_best_effort!("gallery written to {}", index.display());
     Ok(())
 }

@@ -351,7 +351,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     let objective = setup.objective().map_err(in_file)?;
     for term in &objective.terms {
         if let Some((cells, largest)) = term.grid.above_reach() {
-            eprintln!(
+            crate::eprintln_best_effort!(
                 "warning: {}: the target asks for P above N = {} at {cells} frequency cells in {} (up to {}); no set of {} points has P above N, so those cells stay below it and the loss cannot reach 0; scale the image down or raise -n",
                 args.target.display(),
                 args.n,
@@ -366,7 +366,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     let t0 = Instant::now();
     let (points, reports, lattice) = match &target {
         Target::Variance(v) if v.design() == Design::Lattice => {
-            eprintln!(
+            crate::eprintln_best_effort!(
                 "searching the rank-1 lattices of {} points for the lowest predicted variance",
                 args.n
             );
@@ -382,7 +382,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     let seconds = t0.elapsed().as_secs_f64();
     let timed_out = optimize::time_limited(&reports);
     if timed_out > 0 {
-        eprintln!(
+        crate::eprintln_best_effort!(
             "warning: {timed_out} of {} sets stopped at --max-seconds ({} s) before the solver's other limits; the table depends on this machine's speed, and the command in its header may make another; raise --max-seconds",
             args.sets,
             number(args.max_seconds)
@@ -390,7 +390,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     }
     let nudged = reports.iter().filter(|r| r.nudged).count();
     if nudged > 0 {
-        eprintln!(
+        crate::eprintln_best_effort!(
             "note: {nudged} of {} starts had no gradient (a stationary point of the loss, as a lattice or a line of points is by symmetry), so their free coordinates were moved by up to 1e-3/sqrt(N) at random before optimizing (\"nudged\" in the sidecar)",
             args.sets
         );
@@ -467,13 +467,13 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     })?;
     for (f, term) in fits.iter().zip(&objective.terms) {
         match f.variance_ratio {
-            Some(v) => eprintln!(
+            Some(v) => crate::eprintln_best_effort!(
                 "{}: predicted variance {v:.4e} of random sampling's over the fit radius, |k| <= {} (the frequencies the loss weighs), over {}",
                 f.proj,
                 number((term.grid.fit_radius * 10.0).round() / 10.0),
                 super::counted(f.sets, "set")
             ),
-            None => eprintln!(
+            None => crate::eprintln_best_effort!(
                 "{}: dark mean P {:.4} over {}, annular error max {:.4} (rms {:.4}) over {}",
                 f.proj,
                 f.dark_mean,
@@ -486,7 +486,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     }
     if let Some(d) = &lattice {
         let h = d.search_res / 2;
-        eprintln!(
+        crate::eprintln_best_effort!(
             "lattice z = {:?}: predicted variance {:.4e}, {:.4e} of random sampling's over the lattice search's wider grid, k1 and k2 in -{h}..{} (it also counts the lattice's peaks beyond the fit radius); every set is this lattice",
             d.generator,
             d.predicted_variance,
@@ -494,7 +494,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             h - 1
         );
     }
-    eprintln!(
+    crate::eprintln_best_effort!(
         "wrote {} and its .txt, .h, .json and .log.csv ({} of {} points in {}D, {:.1} s)",
         outputs[0].display(),
         super::counted(args.sets, "set"),

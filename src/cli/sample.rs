@@ -46,7 +46,7 @@ pub fn run(args: &SampleArgs) -> Result<()> {
     let sampler = sampler_with_shear(&args.sampler, args.dims, &args.shear)?;
     let sets = generate_sets(sampler.as_ref(), args.n, args.sets, args.seed)?;
     write_points(&args.output, &sets)?;
-    eprintln!(
+    crate::eprintln_best_effort!(
         "wrote {} of {} {}D {} from {} to {}",
         super::counted(sets.sets(), "set"),
         sets.n(),

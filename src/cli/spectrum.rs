@@ -141,7 +141,7 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
             let n = args.n.expect("clap requires -n with --sampler");
             let r = args.realizations.unwrap_or(32);
             if let Some(note) = long_exact_note(n, args.res, r, method) {
-                eprintln!("{note}");
+                crate::eprintln_best_effort!("{note}");
             }
             let spec = of_sampler(sampler.as_ref(), n, proj, args.res, r, args.seed, method)?;
             (spec, sampler_identity(sampler.as_ref(), proj, args.seed))
@@ -181,7 +181,7 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
                 None => sets,
             };
             if let Some(note) = long_exact_note(sets.n(), args.res, sets.sets(), method) {
-                eprintln!("{note}");
+                crate::eprintln_best_effort!("{note}");
             }
             let what = format!("{} in {}", path.display(), proj.name());
             (of_sets(&sets, proj, args.res, method)?, what)
@@ -207,14 +207,14 @@ pub fn run(args: &SpectrumArgs) -> Result<()> {
         .as_ref()
         .and_then(|(_, profile)| dark_withheld_note(profile, method, spec.n))
     {
-        eprintln!("{note}");
+        crate::eprintln_best_effort!("{note}");
     }
     let png_key = if kinds.contains(&ImageKind::Png) {
         format!(" (PNG: {})", crate::output::image::spectrum_png_key())
     } else {
         String::new()
     };
-    eprintln!(
+    crate::eprintln_best_effort!(
         "spectrum of {} of {} on a {}x{} grid written to {}{png_key}",
         super::counted(spec.realizations, "realization"),
         super::counted(spec.n, "point"),

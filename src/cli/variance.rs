@@ -239,7 +239,7 @@ fn warn_dominant_tail(pred: &VariancePrediction, sheared: bool) {
     } else {
         "raise --res-per-n (K = max(--res, M·N)) or --res to push the tail out".to_string()
     };
-    eprintln!(
+    crate::eprintln_best_effort!(
         "warning: the white-noise tail is more than {:.0} % of the predicted variance at {}: it assumes the sampler's spectrum is white (P = 1) beyond the frequency grid, which overstates the variance of a sampler whose spectrum is still below 1 there (jittered or N-rooks past a grid of a few N) and understates it where the spectrum has peaks there (a lattice's P = N); {fix}",
         100.0 * TAIL_WARNING_SHARE,
         dominated.join(", ")

@@ -226,7 +226,7 @@ impl TableCache {
                 let cut_short = stopped > 0 && limit.is_none_or(|l| l < self.seconds);
                 if let (true, Some(seconds)) = (m["key"] == key, m["seconds"].as_f64()) {
                     if cut_short {
-                        eprintln!(
+                        crate::eprintln_best_effort!(
                             "note: rebuilding the cached {} table at N = {n}: {stopped} of its sets stopped at the time limit ({}), and table_seconds is now {} s",
                             source.display(),
                             limit.map_or("not recorded".into(), |l| format!("{l} s")),
@@ -238,7 +238,7 @@ impl TableCache {
                                 let mut warned = self.warned.lock().expect("warned lock");
                                 if stopped > 0 && !warned.contains(&path) {
                                     warned.push(path.clone());
-                                    eprintln!(
+                                    crate::eprintln_best_effort!(
                                         "warning: the cached {} table at N = {n} has {stopped} sets that stopped at the time limit ({} s); raise table_seconds to rebuild it further",
                                         source.display(),
                                         limit.unwrap_or(self.seconds)
@@ -247,7 +247,9 @@ impl TableCache {
                                 return Ok((table, seconds));
                             }
                             Err(e) => {
-                                eprintln!("warning: rebuilding an unreadable cached table: {e}")
+                                crate::eprintln_best_effort!(
+                                    "warning: rebuilding an unreadable cached table: {e}"
+                                )
                             }
                         }
                     }
@@ -303,7 +305,7 @@ impl TableCache {
         let (points, reports) = optimize_sets(&setup, self.sets, self.seed, &|_| {})?;
         let timed_out = crate::optimize::time_limited(&reports);
         if timed_out > 0 {
-            eprintln!(
+            crate::eprintln_best_effort!(
                 "warning: {timed_out} of {} sets of the {} table at N = {n} stopped at the time limit \
                  ({} s) before {TABLE_ITERATIONS} iterations; the table depends on this machine's \
                  speed. Raise table_seconds in the compare config",

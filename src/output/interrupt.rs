@@ -126,14 +126,14 @@ pub fn remove_temporaries_on_interrupt() {
             std::thread::sleep(PASS_PAUSE);
         }
         if removed > 0 {
-            eprintln!("\ninterrupted: removed {removed} unfinished output(s)");
+            crate::eprintln_best_effort!("\ninterrupted: removed {removed} unfinished output(s)");
         } else {
-            eprintln!("\ninterrupted");
+            crate::eprintln_best_effort!("\ninterrupted");
         }
         std::process::exit(INTERRUPTED);
     });
     if let Err(e) = installed {
-        eprintln!("warning: cannot watch for Ctrl-C ({e}); an interrupted write may leave a .anisospec-* file behind");
+        crate::eprintln_best_effort!("warning: cannot watch for Ctrl-C ({e}); an interrupted write may leave a .anisospec-* file behind");
     }
 }
 

@@ -13,6 +13,23 @@ use crate::error::{Error, Result};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+/// `eprintln!` that cannot panic: a line for standard error (a note, a timing, a warning, the error
+/// message itself) that cannot be written there (stderr on a full disk, a closed stream) is dropped,
+/// and the run goes on to its own exit status, since its messages are no part of its results.
+#[macro_export]
+macro_rules! eprintln_best_effort {
+    ($($arg:tt)*) => {
+        $crate::output::write_stderr_line(format_args!($($arg)*))
+    };
+}
+
+/// Writes `text` and a newline to standard error, ignoring a failure: see
+/// [`crate::eprintln_best_effort!`].
+pub fn write_stderr_line(text: std::fmt::Arguments) {
+    // A failed write is ignored on purpose: there is nowhere left to report it.
+    let _ = writeln!(std::io::stderr().lock(), "{text}");
+}
+
 /// FNV-1a, 64 bits, of `bytes`: a stable hash for cache file names and header guards (std's hasher
 /// is not stable across releases or platforms).
 pub fn stable_hash(bytes: &[u8]) -> u64 {
@@ -320,7 +337,7 @@ pub fn write_folder<T>(
 /// writing into one of them right now.
 fn warn_left_staging(dest: &Path) {
     for folder in left_staging(dest) {
-        eprintln!(
+        crate::eprintln_best_effort!(
             "warning: {} is a temporary folder of a run that stopped before it finished (or of one still running); remove it once no other run writes to {}",
             folder.display(),
             dest.display()

@@ -175,7 +175,7 @@ pub fn reference_image(
                 progress.finish_and_clear();
                 return Ok(img);
             }
-            None => eprintln!(
+            None => crate::eprintln_best_effort!(
                 "warning: the cached reference {} is unreadable or not a reference of this scene (shape, or a value that is negative or not finite); computing it again",
                 f.display()
             ),
@@ -212,7 +212,9 @@ pub fn reference_image(
         // not this run its result.
         match crate::output::write_npy(&f, &[h, w, 2], &data) {
             Ok(()) => img.cached = true,
-            Err(e) => eprintln!("warning: the reference image was computed but not cached: {e}"),
+            Err(e) => crate::eprintln_best_effort!(
+                "warning: the reference image was computed but not cached: {e}"
+            ),
         }
     }
     Ok(img)

@@ -205,7 +205,7 @@ impl PixelIntegrand {
                 return r;
             }
             if file.exists() {
-                eprintln!(
+                crate::eprintln_best_effort!(
                     "warning: the cached reference {} is unreadable or not this pixel's (its key, or a value that is negative or not finite); computing it again",
                     file.display()
                 );
@@ -217,7 +217,9 @@ impl PixelIntegrand {
                 write!(w, "{json}")
             });
             if let Err(e) = written {
-                eprintln!("warning: the reference was computed but not cached: {e}");
+                crate::eprintln_best_effort!(
+                    "warning: the reference was computed but not cached: {e}"
+                );
             }
             return r;
         }

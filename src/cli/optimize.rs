@@ -70,8 +70,10 @@ pub struct OptimizeArgs {
     /// Loss: weight of the repulsion term; 0 (off) to 1e6.
     #[arg(long, default_value_t = DEFAULT_REPULSION.weight, allow_negative_numbers = true)]
     pub repulsion_weight: f64,
-    /// Loss, 4D: radius of the blue-noise dark disc that keeps xy and uv stratified, in units of
-    /// sqrt(N).
+    /// Loss, 4D: radius of the blue-noise dark disc that keeps xy and uv stratified: the disc is
+    /// |k| < radius · sqrt(N) in frequency cells (cycles per unit), so the unit is sqrt(N) cells.
+    /// Valid: above 1/sqrt(N) (a smaller disc holds no cell at that N) up to about 0.56 = 1/sqrt(π)
+    /// (N points can darken about N cells at most); --strat-weight 0 switches the term off.
     #[arg(long, default_value_t = DEFAULT_STRATA.radius, allow_negative_numbers = true)]
     pub strat_radius: f64,
     /// Loss, 4D: weight of the xy and uv stratification terms; 0 (leaves them free) to 1e6.
@@ -92,7 +94,11 @@ pub struct OptimizeArgs {
     /// S/C times this.
     #[arg(long, default_value_t = DEFAULT_LIMITS.max_seconds, allow_negative_numbers = true)]
     pub max_seconds: f64,
-    /// Stop when a solver round lowers the loss by less than this fraction.
+    /// Stop when a solver round lowers the loss by less than this fraction of the loss it started
+    /// from (a finite number >= 0; with 0 a run stops only at a round that gains nothing, or at the
+    /// iteration or time limit). A round is one L-BFGS run restarted from the best set so far, which
+    /// ends when an iteration changes the loss by less than tol × 1e-3 × min(|loss|, 1); after a
+    /// failed L-BFGS step, a round is 50 iterations of steepest descent instead.
     #[arg(long, default_value_t = DEFAULT_LIMITS.tol, allow_negative_numbers = true)]
     pub tol: f64,
 }

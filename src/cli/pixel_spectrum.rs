@@ -35,12 +35,12 @@ pub struct PixelSpectrumArgs {
     /// (see --average), which gives the k_other = 0 slice of the 4D spectrum.
     #[arg(long, default_value = "xu", allow_hyphen_values = true)]
     pub proj: String,
-    /// Frequency grid size K (even, from 2 to 8192): the integrand is sampled on a K x K grid of cell
-    /// centres and k1, k2 run over -K/2..K/2-1. K² · M² (with M of --average) is at most 1073741824 ray casts
-    /// (2^30, e.g. K = 128 with M = 256, or K = 1024 with M = 32). A pixel's edges alias, most near
-    /// the border and where |f̂|² is small (pixel 30,40 at K = 64 against K = 512: -1 % at k = (12, 0),
-    /// -5 % at (10, -7), +17 % at (5, 3), -13 % at (30, -21), 2.5 times at (31, 0)); for values up to
-    /// |k| = k_max, take K of at least 4 k_max and read the centre.
+    /// Frequency grid size K: even, from 2 to 8192, and K · M at most 32768 (M of --average: K² · M²
+    /// ray casts, at most 2^30, e.g. K = 128 with M = 256, or K = 1024 with M = 32). The integrand is
+    /// sampled on a K x K grid of cell centres and k1, k2 run over -K/2..K/2-1. A pixel's edges
+    /// alias, most near the border and where |f̂|² is small (pixel 30,40 at K = 64 against K = 512:
+    /// -1 % at k = (12, 0), -5 % at (10, -7), +17 % at (5, 3), -13 % at (30, -21), 2.5 times at
+    /// (31, 0)); for values up to |k| = k_max, take K of at least 4 k_max and read the centre.
     #[arg(long, default_value_t = 128, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub res: usize,
     /// The other two coordinates are averaged with an M x M midpoint grid; 1 fixes them to 1/2. At

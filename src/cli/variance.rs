@@ -60,10 +60,14 @@ pub struct VarianceArgs {
     /// edge the shear matches lies on its k1 axis, in cone 0.
     #[arg(long, default_value_t = 4, value_parser = crate::cli::parse_whole, allow_negative_numbers = true)]
     pub cones: usize,
-    /// Use the exact DFT for full-grid spectra instead of the NUFFT.
+    /// Use the exact DFT instead of the NUFFT for full-grid planes: a plane is summed over its whole
+    /// K × K grid at once when more than a quarter of the grid's frequencies carry the integrand's
+    /// |f̂|²; a sparser plane is always summed exactly at those frequencies alone, which --exact and
+    /// --eps do not change.
     #[arg(long, conflicts_with = "eps")]
     pub exact: bool,
-    /// NUFFT tolerance for full-grid spectra (relative error of P), from 1e-12 to 1e-1.
+    /// NUFFT tolerance (relative error of P), from 1e-12 to 1e-1, for full-grid planes (more than a
+    /// quarter of the K × K grid carries |f̂|²; see --exact).
     #[arg(long, default_value = "1e-9", allow_negative_numbers = true)]
     pub eps: f64,
     /// Random seed of the realizations.

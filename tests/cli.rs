@@ -3937,8 +3937,7 @@ fn an_interrupted_gallery_leaves_no_temporary() {
 
 /// A cache folder chosen by `$ANISOSPEC_CACHE` that is a file is refused before any work, naming the
 /// variable (not a `--cache` flag the user never gave), by every command that caches a reference:
-/// render, compare, and converge on a pixel (which only warned after the work before, and has no
-/// --cache flag to name).
+/// render, compare, and converge on a pixel (which only warned after the work before).
 #[test]
 fn a_cache_variable_that_names_a_file_is_refused_by_name() {
     let (dir, exr) = tmp("out.exr");
@@ -3974,8 +3973,7 @@ fn a_cache_variable_that_names_a_file_is_refused_by_name() {
         refused(&o, &args, "give $ANISOSPEC_CACHE a folder path", out);
         assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
     }
-    // Without the variable, converge (which has no --cache flag) names the default folder and the
-    // variable that chooses another.
+    // Without the variable, converge names the default folder and its --cache flag, as compare does.
     std::fs::create_dir(dir.path().join("out")).unwrap();
     std::fs::write(dir.path().join("out/cache"), "x").unwrap();
     let mut args = converge.to_vec();
@@ -3989,7 +3987,7 @@ fn a_cache_variable_that_names_a_file_is_refused_by_name() {
     refused(
         &o,
         &args,
-        "the cache folder out/cache is a file, not a folder, so no cache folder can be written there; set $ANISOSPEC_CACHE to a folder path",
+        "--cache out/cache is a file, not a folder, so no cache folder can be written there; give --cache a folder path",
         &csv,
     );
 }
@@ -4183,4 +4181,70 @@ fn a_full_standard_error_keeps_the_work_and_the_exit_status() {
         assert_eq!(o.status.code(), Some(2), "{args:?}: {:?}", o.status);
         assert!(!out.exists(), "{args:?}");
     }
+}
+
+/// `converge --cache DIR` keeps a pixel's reference in DIR, ahead of `$ANISOSPEC_CACHE` (which then
+/// stays empty), as compare's and render's --cache do; a --cache with an analytic integrand, which
+/// has no reference to cache, is refused.
+#[test]
+fn converge_caches_a_pixel_reference_in_its_cache_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let (given, variable) = (dir.path().join("given"), dir.path().join("variable"));
+    std::fs::create_dir(&variable).unwrap();
+    let csv = dir.path().join("c.csv");
+    let converge = |cache: Option<&Path>| {
+        let mut args = vec![
+            "converge",
+            "--sampler",
+            "random",
+            "--integrand",
+            "pixel:px=1,py=1,refcount=1024",
+            "-n",
+            "16",
+            "--realizations",
+            "4",
+            "-o",
+            csv.to_str().unwrap(),
+        ];
+        if let Some(c) = cache {
+            args.extend(["--cache", c.to_str().unwrap()]);
+        }
+        let o = Command::new(env!("CARGO_BIN_EXE_anisospec"))
+            .args(&args)
+            .env("ANISOSPEC_CACHE", &variable)
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    let entries = |d: &Path| std::fs::read_dir(d).map_or(0, |e| e.count());
+    converge(Some(&given));
+    assert_eq!(entries(&given), 1, "the reference is cached in --cache");
+    assert_eq!(
+        entries(&variable),
+        0,
+        "--cache takes precedence over $ANISOSPEC_CACHE"
+    );
+    // Without the flag the variable chooses, as before.
+    converge(None);
+    assert_eq!(entries(&variable), 1);
+    let args = [
+        "converge",
+        "--sampler",
+        "random",
+        "--integrand",
+        "disc:r=0.3",
+        "-n",
+        "16",
+        "--cache",
+        given.to_str().unwrap(),
+        "-o",
+        csv.to_str().unwrap(),
+    ];
+    std::fs::remove_file(&csv).unwrap();
+    rejects(
+        &args,
+        "--cache has no effect with --integrand disc:r=0.3",
+        &csv,
+    );
 }

@@ -4,7 +4,7 @@ use crate::converge::{converge, plot, write_csv, ConvergeConfig, Convergence};
 use crate::error::{Error, Result};
 use crate::integrands::parse;
 use crate::samplers::Sampler;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Measure MSE(N) over independent, randomly shifted realizations, and fit the convergence slope.
 #[derive(Clone, Debug, clap::Args)]
@@ -15,8 +15,8 @@ pub struct ConvergeArgs {
     #[arg(long, value_delimiter = ',', required = true)]
     pub sampler: Vec<String>,
     /// Integrand, NAME:key=value,... (see `anisospec integrands`), e.g. disc:r=0.3. A pixel of the
-    /// scene (pixel:px=COLUMN,py=ROW) renders its reference once and keeps it in $ANISOSPEC_CACHE, or
-    /// out/cache under the working folder, for the next run.
+    /// scene (pixel:px=COLUMN,py=ROW) renders its reference once and keeps it in the --cache folder
+    /// for the next run.
     #[arg(long)]
     pub integrand: String,
     /// Sample counts N, comma-separated, e.g. 16,64,256,1024,4096 (N × D at most 2^28 coordinates).
@@ -54,8 +54,30 @@ pub struct ConvergeArgs {
     pub plot: Option<PathBuf>,
 }
 
-/// Runs every sampler, prints a table per sampler, writes the CSV and the plot.
+/// The whole command line of `anisospec converge`: [`ConvergeArgs`] and the folder of a pixel's
+/// reference, which a caller of [`run`] leaves to `$ANISOSPEC_CACHE` or out/cache.
+#[derive(Clone, Debug, clap::Args)]
+pub struct ConvergeCommand {
+    #[command(flatten)]
+    pub args: ConvergeArgs,
+    /// Folder a pixel integrand's reference is cached in and read back from (default $ANISOSPEC_CACHE,
+    /// or out/cache under the working folder when that is unset or empty, as for render and compare).
+    /// Only a pixel of the scene has a reference to cache.
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
+}
+
+/// Runs every sampler, prints a table per sampler, writes the CSV and the plot; a pixel's reference
+/// is cached in `$ANISOSPEC_CACHE`, or out/cache when that is unset or empty.
 pub fn run(args: &ConvergeArgs) -> Result<()> {
+    run_with_cache(args, None)
+}
+
+/// [`run`] with a pixel's reference cached in `cache` when given (the `--cache` flag), which takes
+/// precedence over `$ANISOSPEC_CACHE`: for a pixel, a given `cache` is passed on by setting
+/// `$ANISOSPEC_CACHE` for the rest of the process (the pixel parser reads the folder from it), so
+/// call this before other threads read the environment, as the command does.
+pub fn run_with_cache(args: &ConvergeArgs, cache: Option<&Path>) -> Result<()> {
     if let Some(csv) = &args.output {
         crate::cli::require_extension(csv, "-o", "csv", "a CSV table")?;
     }
@@ -68,7 +90,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         .flat_map(|name| crate::samplers::input_files(name.trim()))
         .chain(crate::integrands::spec::input_files(&args.integrand))
         .collect();
-    let outputs: Vec<&std::path::Path> = args
+    let outputs: Vec<&Path> = args
         .output
         .iter()
         .chain(&args.plot)
@@ -78,8 +100,19 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
     crate::output::check_outputs(&outputs, &inputs)?;
     // A pixel's reference goes to the cache once computed: a file in the cache's way is refused
     // before that work.
-    if args.integrand.trim_start().starts_with("pixel:") {
-        crate::render::pixel::check_reference_cache()?;
+    if crate::integrands::spec::names_a_pixel(&args.integrand) {
+        let (folder, source) = crate::render::pixel::cache_dir_and_source(cache);
+        crate::output::check_folder(&folder, source, "cache")?;
+        if let Some(dir) = cache {
+            // The pixel parser caches in the folder $ANISOSPEC_CACHE names (else out/cache): set
+            // here, --cache takes precedence over the variable as in render and compare.
+            std::env::set_var("ANISOSPEC_CACHE", dir);
+        }
+    } else if cache.is_some() {
+        return Err(Error::Usage(format!(
+            "--cache has no effect with --integrand {}: only a pixel of the scene (pixel:px=COLUMN,py=ROW) has a reference to cache; leave --cache out",
+            args.integrand.trim()
+        )));
     }
     let f = parse(&args.integrand)?;
     if args.random_placement && f.placed(&mut crate::rng::stream(0, 0)).is_none() {
@@ -254,7 +287,7 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
         }
         drawable
     });
-    let outputs: Vec<&std::path::Path> = args
+    let outputs: Vec<&Path> = args
         .output
         .iter()
         .chain(plot_file)

@@ -4248,3 +4248,188 @@ fn converge_caches_a_pixel_reference_in_its_cache_flag() {
         &csv,
     );
 }
+
+/// A spectrum command's files hold what the library computes: the npy is the mean of the exact
+/// `spectrum::power` of each set's xu projection, in DESIGN §3's layout, and the radial CSV is
+/// `radial_profile` of that mean; the NUFFT's meets its contract against it.
+#[test]
+fn spectrum_outputs_equal_the_librarys_recomputation() {
+    use anisospec::spectrum::{expected::ExpectedSpectrum, profiles, Method};
+    use rand::Rng as _;
+    let (sets, n, res, cones) = (3, 40, 32, 4);
+    let mut rng = anisospec::rng::stream(17, 0);
+    let values: Vec<f64> = (0..sets * n * 4).map(|_| rng.random::<f64>()).collect();
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("pts.npy");
+    std::fs::write(&input, npy_bytes("(3, 40, 4)", false, &values)).unwrap();
+    let run = |method: &[&str], npy: &str, csv: &str| -> (Vec<f64>, Vec<Vec<String>>) {
+        let (npy, csv) = (dir.path().join(npy), dir.path().join(csv));
+        let mut args = vec![
+            "spectrum",
+            "--input",
+            input.to_str().unwrap(),
+            "--proj",
+            "xu",
+            "--res",
+            "32",
+            "-o",
+            npy.to_str().unwrap(),
+            "--radial",
+            csv.to_str().unwrap(),
+            "--cones",
+            "4",
+        ];
+        args.extend(method);
+        let o = anisospec(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let bytes = std::fs::read(&npy).unwrap();
+        let file = npyz::NpyFile::new(&bytes[..]).unwrap();
+        assert_eq!(file.shape(), &[32, 32]);
+        let rows = std::fs::read_to_string(&csv)
+            .unwrap()
+            .lines()
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect();
+        (file.into_vec().unwrap(), rows)
+    };
+    // x and u are dimensions 0 and 2: k1 goes with x, k2 with u.
+    let projected: Vec<Vec<[f64; 2]>> = (0..sets)
+        .map(|s| {
+            (0..n)
+                .map(|j| [values[(s * n + j) * 4], values[(s * n + j) * 4 + 2]])
+                .collect()
+        })
+        .collect();
+    let powers: Vec<Vec<f64>> = projected
+        .iter()
+        .map(|p| anisospec::spectrum::power(p, res, Method::Exact))
+        .collect();
+    let r = sets as f64;
+    let mean: Vec<f64> = (0..res * res)
+        .map(|b| powers.iter().map(|p| p[b]).sum::<f64>() / r)
+        .collect();
+    // Two-pass standard error per bin.
+    let stderr: Vec<f64> = (0..res * res)
+        .map(|b| {
+            let var = powers.iter().map(|p| (p[b] - mean[b]).powi(2)).sum::<f64>() / (r - 1.0);
+            (var / r).sqrt()
+        })
+        .collect();
+    // The layout, against a direct sum written here: P[i, j] holds k1 = j - K/2, k2 = i - K/2. Each
+    // sum errs by at most the library's bound of an exact P (`profiles::precision`: relative
+    // 2 ρ_F + 2u, absolute ρ_F² N in a dark bin), so the two differ by twice that.
+    let (dark, flat) = profiles::precision(Method::Exact, n, res);
+    for i in 0..res {
+        for j in 0..res {
+            let (k1, k2) = (j as i64 - 16, i as i64 - 16);
+            let direct = projected
+                .iter()
+                .map(|p| {
+                    let f: rustfft::num_complex::Complex64 = p
+                        .iter()
+                        .map(|q| {
+                            anisospec::spectrum::exact::turn(k1 as f64 * q[0] + k2 as f64 * q[1])
+                        })
+                        .sum();
+                    f.norm_sqr() / n as f64
+                })
+                .sum::<f64>()
+                / r;
+            let tol = 2.0 * (flat * direct + dark);
+            assert!(
+                (mean[i * res + j] - direct).abs() <= tol,
+                "k = ({k1}, {k2}): {} vs the direct sum {direct}",
+                mean[i * res + j]
+            );
+        }
+    }
+    let (exact_npy, exact_csv) = run(&["--exact"], "exact.npy", "exact.csv");
+    // The library sums the sets' P in set order and divides by R (PowerSums::mean_and_stderr: "the
+    // bits of summing power's output set by set in the same order"): the same bits.
+    for (b, (got, want)) in exact_npy.iter().zip(&mean).enumerate() {
+        assert_eq!(got.to_bits(), want.to_bits(), "bin {b}: {got} vs {want}");
+    }
+    let spec = ExpectedSpectrum {
+        res,
+        n,
+        realizations: sets,
+        mean: mean.clone(),
+        stderr: stderr.clone(),
+    };
+    let profile = profiles::radial_profile(&spec, cones, Method::Exact);
+    assert_eq!(
+        exact_csv[0].join(","),
+        "r,r_normalized,mean,stderr,anisotropy_db,cone0_0.0deg,cone1_45.0deg,cone2_90.0deg,cone3_135.0deg"
+    );
+    assert_eq!(
+        exact_csv.len(),
+        1 + res / 2 - 1,
+        "one row per annulus r = 1 .. K/2 - 1"
+    );
+    let number = |s: &str| {
+        s.parse::<f64>()
+            .unwrap_or_else(|_| panic!("'{s}' is no number"))
+    };
+    for (row, bin) in exact_csv[1..].iter().zip(&profile) {
+        assert_eq!(row.len(), 5 + cones);
+        assert_eq!(row[0], bin.r.to_string());
+        // The CSV's numbers read back exactly (shortest round-trip form), and every column but the
+        // standard error is computed from the same mean bits.
+        assert_eq!(number(&row[1]), bin.r_normalized);
+        assert_eq!(number(&row[2]), bin.mean, "r = {}", bin.r);
+        assert_eq!(
+            row[4].parse::<f64>().ok(),
+            bin.anisotropy_db,
+            "r = {}",
+            bin.r
+        );
+        for (cell, cone) in row[5..].iter().zip(&bin.cones) {
+            assert_eq!(cell.parse::<f64>().ok(), *cone, "r = {}", bin.r);
+        }
+        // The library's standard error takes the sums of P and of (P - P_first)² in one pass; the
+        // two-pass one here differs by rounding alone: each variance of R values of at most
+        // P_max errs by at most (R + 4) u (2 P_max)² R / (R - 1) (u = 2^-53), so the annulus's
+        // sqrt(2 Σ se²) / c errs by at most 2 Σ that / R over c (sqrt a + sqrt b).
+        let u = f64::EPSILON / 2.0;
+        let (mut bound, mut count) = (0.0, 0.0);
+        for b in 0..res * res {
+            let (k1, k2) = anisospec::spectrum::frequency(b, res);
+            if profiles::annulus(k1, k2) == bin.r {
+                let p_max = powers.iter().map(|p| p[b]).fold(0.0, f64::max);
+                bound += 2.0 * (r + 4.0) * u * (2.0 * p_max).powi(2) * r / (r - 1.0) / r;
+                count += 1.0;
+            }
+        }
+        let (got, want) = (number(&row[3]), bin.stderr.unwrap());
+        // Plus each side's rounding of Σ se² over the c bins and of the root: (c + 4) u relative.
+        let tol = 2.0 * bound / (count * count * (got + want)) + (count + 4.0) * u * (got + want);
+        assert!(
+            (got - want).abs() <= tol,
+            "r = {}: stderr {got} vs {want} (bound {tol:e})",
+            bin.r
+        );
+    }
+    // The NUFFT at eps = 1e-9: within its contract (10 eps relative in every bin above 1e-3 of the
+    // mean) against the exact mean, and so are the profile's means, means of such bins.
+    let eps = 1e-9;
+    let (nufft_npy, nufft_csv) = run(&["--eps", "1e-9"], "nufft.npy", "nufft.csv");
+    let err = anisospec::spectrum::nufft::contract_error(&nufft_npy, &mean);
+    assert!(err <= 10.0 * eps, "NUFFT error {err:e}");
+    let grid_mean = mean.iter().sum::<f64>() / mean.len() as f64;
+    assert!(
+        mean.iter().all(|&p| p >= 1e-3 * grid_mean),
+        "every bin is under the contract"
+    );
+    for (row, bin) in nufft_csv[1..].iter().zip(&profile) {
+        let close = |got: f64, want: f64| (got - want).abs() <= 10.0 * eps * want;
+        assert!(
+            close(number(&row[2]), bin.mean),
+            "r = {}: {}",
+            bin.r,
+            row[2]
+        );
+        for (cell, cone) in row[5..].iter().zip(&bin.cones) {
+            assert!(close(number(cell), cone.unwrap()), "r = {}: {cell}", bin.r);
+        }
+    }
+}

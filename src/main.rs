@@ -34,7 +34,7 @@ enum Command {
     /// 1024 (the pulled-back integrand is sampled on 4K points per side, at most 4096).
     Variance(cli::variance::VarianceArgs),
     /// Measure the convergence of samplers on an integrand: MSE against N, slope, time.
-    Converge(cli::converge::ConvergeCommand),
+    Converge(cli::converge::ConvergeArgs),
     /// Render the depth-of-field scene with a sampler, optionally sheared by the depth oracle.
     Render(cli::render::RenderArgs),
     /// Write the depth oracle per pixel: depth, shear, shear range and class.
@@ -175,7 +175,7 @@ fn run(command: &Command) -> anisospec::error::Result<()> {
         Command::Gallery(a) => cli::gallery::run(a),
         Command::Integrands(a) => cli::integrands::run(a),
         Command::Variance(a) => cli::variance::run(a),
-        Command::Converge(c) => cli::converge::run_with_cache(&c.args, c.cache.as_deref()),
+        Command::Converge(a) => cli::converge::run(a),
         Command::Render(a) => cli::render::run(a),
         Command::Oracle(a) => cli::oracle::run(a),
         Command::PixelSpectrum(a) => cli::pixel_spectrum::run(a),

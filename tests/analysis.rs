@@ -776,6 +776,7 @@ fn commands_write_csv_and_plot_and_refuse_bad_input() {
         },
         output: Some(csv.clone()),
         plot: Some(png.clone()),
+        cache: None,
     };
     converge_run(&args).unwrap();
     let text = std::fs::read_to_string(&csv).unwrap();
@@ -821,6 +822,7 @@ fn commands_write_csv_and_plot_and_refuse_bad_input() {
             integrand: spec.into(),
             output: Some(bad.clone()),
             plot: None,
+            cache: None,
             ..args.clone()
         })
         .unwrap_err();
@@ -830,6 +832,7 @@ fn commands_write_csv_and_plot_and_refuse_bad_input() {
         sampler: vec!["random".into(), "nosuch".into()],
         output: Some(bad.clone()),
         plot: None,
+        cache: None,
         ..args.clone()
     })
     .unwrap_err();

@@ -329,14 +329,14 @@ fn bad_input_is_reported_with_exit_code_two() {
     let e = Scene::load(Some(&dir.path().join("missing.toml"))).unwrap_err();
     assert_eq!(e.exit_code(), 2);
 
-    let e = anisospec::render::parse_pixel_spec("px=64,py=3")
+    let e = anisospec::render::parse_pixel_spec("px=64,py=3", None)
         .err()
         .unwrap();
     assert_eq!(e.exit_code(), 2);
     assert!(e.to_string().contains("64x64"), "{e}");
-    assert!(anisospec::render::parse_pixel_spec("px=3").is_err());
-    assert!(anisospec::render::parse_pixel_spec("px=3,py=4,colour=red").is_err());
-    let e = anisospec::render::parse_pixel_spec("px=1,py=1,px=2")
+    assert!(anisospec::render::parse_pixel_spec("px=3", None).is_err());
+    assert!(anisospec::render::parse_pixel_spec("px=3,py=4,colour=red", None).is_err());
+    let e = anisospec::render::parse_pixel_spec("px=1,py=1,px=2", None)
         .err()
         .unwrap();
     assert_eq!(e.exit_code(), 2);

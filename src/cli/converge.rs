@@ -2,7 +2,7 @@
 
 use crate::converge::{converge, plot, write_csv, ConvergeConfig, Convergence};
 use crate::error::{Error, Result};
-use crate::integrands::parse;
+use crate::integrands::parse_with_cache;
 use crate::samplers::Sampler;
 use std::path::{Path, PathBuf};
 
@@ -52,14 +52,6 @@ pub struct ConvergeArgs {
     /// the title.
     #[arg(long)]
     pub plot: Option<PathBuf>,
-}
-
-/// The whole command line of `anisospec converge`: [`ConvergeArgs`] and the folder of a pixel's
-/// reference, which a caller of [`run`] leaves to `$ANISOSPEC_CACHE` or out/cache.
-#[derive(Clone, Debug, clap::Args)]
-pub struct ConvergeCommand {
-    #[command(flatten)]
-    pub args: ConvergeArgs,
     /// Folder a pixel integrand's reference is cached in and read back from (default $ANISOSPEC_CACHE,
     /// or out/cache under the working folder when that is unset or empty, as for render and compare).
     /// Only a pixel of the scene has a reference to cache.
@@ -67,17 +59,9 @@ pub struct ConvergeCommand {
     pub cache: Option<PathBuf>,
 }
 
-/// Runs every sampler, prints a table per sampler, writes the CSV and the plot; a pixel's reference
-/// is cached in `$ANISOSPEC_CACHE`, or out/cache when that is unset or empty.
+/// Runs every sampler, prints a table per sampler, writes the CSV and the plot.
 pub fn run(args: &ConvergeArgs) -> Result<()> {
-    run_with_cache(args, None)
-}
-
-/// [`run`] with a pixel's reference cached in `cache` when given (the `--cache` flag), which takes
-/// precedence over `$ANISOSPEC_CACHE`: for a pixel, a given `cache` is passed on by setting
-/// `$ANISOSPEC_CACHE` for the rest of the process (the pixel parser reads the folder from it), so
-/// call this before other threads read the environment, as the command does.
-pub fn run_with_cache(args: &ConvergeArgs, cache: Option<&Path>) -> Result<()> {
+    let cache = args.cache.as_deref();
     if let Some(csv) = &args.output {
         crate::cli::require_extension(csv, "-o", "csv", "a CSV table")?;
     }
@@ -103,18 +87,13 @@ pub fn run_with_cache(args: &ConvergeArgs, cache: Option<&Path>) -> Result<()> {
     if crate::integrands::spec::names_a_pixel(&args.integrand) {
         let (folder, source) = crate::render::pixel::cache_dir_and_source(cache);
         crate::output::check_folder(&folder, source, "cache")?;
-        if let Some(dir) = cache {
-            // The pixel parser caches in the folder $ANISOSPEC_CACHE names (else out/cache): set
-            // here, --cache takes precedence over the variable as in render and compare.
-            std::env::set_var("ANISOSPEC_CACHE", dir);
-        }
     } else if cache.is_some() {
         return Err(Error::Usage(format!(
             "--cache has no effect with --integrand {}: only a pixel of the scene (pixel:px=COLUMN,py=ROW) has a reference to cache; leave --cache out",
             args.integrand.trim()
         )));
     }
-    let f = parse(&args.integrand)?;
+    let f = parse_with_cache(&args.integrand, cache)?;
     if args.random_placement && f.placed(&mut crate::rng::stream(0, 0)).is_none() {
         return Err(crate::error::Error::Usage(format!(
             "--random-placement: {} has nothing to move at random (a pixel of the scene has no placement); leave the flag out",

@@ -13,7 +13,7 @@ pub mod sampled;
 pub mod shapes;
 pub mod spec;
 
-pub use spec::{parse, FAMILIES};
+pub use spec::{parse, parse_with_cache, FAMILIES};
 
 use crate::points::Projection;
 use crate::rng::Rng;

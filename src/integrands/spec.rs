@@ -174,8 +174,15 @@ pub fn family(name: &str) -> Result<&'static Family> {
     })
 }
 
-/// Parses `NAME:key=value,...[@proj]` terms joined by `*` and `+` into an integrand.
+/// Parses `NAME:key=value,...[@proj]` terms joined by `*` and `+` into an integrand; a pixel's
+/// reference is cached in [`crate::render::pixel::default_cache_dir`].
 pub fn parse(spec: &str) -> Result<Box<dyn Integrand>> {
+    parse_with_cache(spec, None)
+}
+
+/// [`parse`], with a pixel's reference cached in `cache` when given (a `--cache` flag); other
+/// integrands have no reference and ignore it.
+pub fn parse_with_cache(spec: &str, cache: Option<&std::path::Path>) -> Result<Box<dyn Integrand>> {
     let spec = spec.trim();
     if spec.is_empty() {
         return Err(Error::Usage(
@@ -191,7 +198,7 @@ pub fn parse(spec: &str) -> Result<Box<dyn Integrand>> {
         if joined {
             return Err(Error::Usage(PIXEL_STANDS_ALONE.into()));
         }
-        return crate::render::pixel::parse_pixel_spec(pixel);
+        return crate::render::pixel::parse_pixel_spec(pixel, cache);
     }
     let mut terms: Vec<Box<dyn Integrand>> = Vec::new();
     for term in split_plus(spec) {

@@ -33,23 +33,6 @@ pub fn default_cache_dir() -> PathBuf {
     cache_dir_and_source(None).0
 }
 
-/// Refuses a cache folder for pixel references that a file stands in the way of, for a command
-/// without a `--cache` flag, naming `$ANISOSPEC_CACHE` as the way to choose another: before the
-/// reference's work, as render and compare refuse their `--cache`.
-pub fn check_reference_cache() -> Result<()> {
-    let (dir, source) = cache_dir_and_source(None);
-    if source == "--cache" {
-        crate::output::check_folder_fixed_by(
-            &dir,
-            "the cache folder",
-            "cache",
-            "set $ANISOSPEC_CACHE to a folder path, or move the file",
-        )
-    } else {
-        crate::output::check_folder(&dir, source, "cache")
-    }
-}
-
 /// The cache folder a command uses, and where that choice came from, to name in a message about
 /// it: `given` (a `--cache` flag), else `$ANISOSPEC_CACHE` when set and non-empty, else `out/cache`
 /// (named as `--cache`, the flag that chooses another).
@@ -262,9 +245,12 @@ impl Integrand for PixelIntegrand {
 
 /// Parses the parameters of a `pixel:` integrand, `px=…,py=…[,scene=FILE][,refcount=N]` (the
 /// `pixel:` prefix may be included): the pixel's column and row, an optional TOML scene file, and the
-/// reference count (default [`DEFAULT_PIXEL_REF_COUNT`]). References are cached in
-/// [`default_cache_dir`] ([`check_reference_cache`] checks it).
-pub fn parse_pixel_spec(params: &str) -> Result<Box<dyn Integrand>> {
+/// reference count (default [`DEFAULT_PIXEL_REF_COUNT`]). The reference is cached in `cache` (a
+/// `--cache` flag), else in [`default_cache_dir`].
+pub fn parse_pixel_spec(
+    params: &str,
+    cache: Option<&std::path::Path>,
+) -> Result<Box<dyn Integrand>> {
     let body = params.strip_prefix("pixel:").unwrap_or(params);
     let (mut px, mut py, mut scene, mut count) = (None, None, None, DEFAULT_PIXEL_REF_COUNT);
     let usage = |m: String| {
@@ -303,6 +289,7 @@ pub fn parse_pixel_spec(params: &str) -> Result<Box<dyn Integrand>> {
     Ok(Box::new(
         PixelIntegrand::new(scene, px, py)?
             .with_ref_count(count)?
+            .with_cache_dir(Some(cache_dir_and_source(cache).0))
             .with_label(label),
     ))
 }

@@ -54,9 +54,9 @@ pub struct OptimizeArgs {
     /// Hold the first coordinate (2D) or x and y (4D) where --init put them, one point per interval
     /// [s/N, (s+1)/N) at its centre (by rank if the start is not stratified), and move only the
     /// others. The k1 axis then stays dark up to N, beyond the loss's frequency grid, and in 4D xy
-    /// keeps the start's structure (its strata term is then a constant of the loss, so --strat-radius
-    /// and --strat-weight act on uv alone). Use it, with --init padded-pmj02 in 4D, for tables applied
-    /// through the transported shear (widened hairline, double wedge).
+    /// keeps the start's structure (its strata term is then a constant of the loss, computed once,
+    /// so --strat-radius and --strat-weight act on uv alone). Use it, with --init padded-pmj02 in 4D,
+    /// for tables applied through the transported shear (widened hairline, double wedge).
     #[arg(long)]
     pub latin: bool,
     /// Loss: weight of the term that pulls the mean P of each annulus |k| = r (outside the dark

@@ -220,8 +220,49 @@ impl Objective {
         )
     }
 
+    /// The projections repulsion acts in: each constrained projection once, in the terms' order.
+    fn repelled(&self) -> Vec<Projection> {
+        let mut seen: Vec<Projection> = Vec::new();
+        for term in &self.terms {
+            if !seen.contains(&term.proj) {
+                seen.push(term.proj);
+            }
+        }
+        seen
+    }
+
     /// The loss and its gradient at `set` (`[n, dims]`, coordinates taken mod 1).
     pub fn evaluate(&self, set: &[f64]) -> Evaluation {
+        self.evaluate_with(set, &Held::default())
+    }
+
+    /// The parts of the loss at `set` that depend only on held coordinates: every term, and every
+    /// projection's repulsion, whose two coordinates are `held` (`[n, dims]`, as the solver's mask)
+    /// at every point. While those coordinates keep their values these parts are constants.
+    pub(super) fn held_parts(&self, set: &[f64], held: &[bool]) -> Held {
+        let is_held = |proj: Projection| {
+            held.chunks_exact(self.dims)
+                .all(|point| point[proj.a] && point[proj.b])
+        };
+        Held {
+            terms: self
+                .terms
+                .iter()
+                .map(|t| is_held(t.proj).then(|| self.term_loss(t, set).0))
+                .collect(),
+            repulsion: self
+                .repelled()
+                .into_iter()
+                .map(|proj| is_held(proj).then(|| self.repulsion_loss(proj, set).0))
+                .collect(),
+        }
+    }
+
+    /// [`Objective::evaluate`] with the parts in `held` taken as computed there, not recomputed: the
+    /// same loss bits while the held coordinates keep their values, and a gradient that differs only
+    /// at the held coordinates (which the solver zeroes). With `--latin` in 4D, `x` and `y` are held,
+    /// so the `xy` strata term and its repulsion (about a quarter of the spectral work) are constants.
+    pub(super) fn evaluate_with(&self, set: &[f64], held: &Held) -> Evaluation {
         debug_assert_eq!(set.len(), self.n * self.dims);
         let mut gradient = vec![0.0; set.len()];
         let (mut spectral, mut repulsion) = (0.0, 0.0);
@@ -231,26 +272,109 @@ impl Objective {
                 gradient[j * self.dims + proj.b] += b;
             }
         };
-        for term in &self.terms {
+        for (i, term) in self.terms.iter().enumerate() {
+            if let Some(l) = held.terms.get(i).copied().flatten() {
+                spectral += l;
+                continue;
+            }
             let (l, ga, gb) = self.term_loss(term, set);
             spectral += l;
             add(term.proj, &ga, &gb);
         }
-        let mut seen: Vec<Projection> = Vec::new();
-        for term in &self.terms {
-            if seen.contains(&term.proj) {
+        for (i, proj) in self.repelled().into_iter().enumerate() {
+            if let Some(e) = held.repulsion.get(i).copied().flatten() {
+                repulsion += e;
                 continue;
             }
-            seen.push(term.proj);
-            let (e, ga, gb) = self.repulsion_loss(term.proj, set);
+            let (e, ga, gb) = self.repulsion_loss(proj, set);
             repulsion += e;
-            add(term.proj, &ga, &gb);
+            add(proj, &ga, &gb);
         }
         Evaluation {
             loss: spectral + repulsion,
             spectral,
             repulsion,
             gradient,
+        }
+    }
+}
+
+/// Loss parts that depend only on coordinates the solver holds ([`Objective::held_parts`]): per
+/// term, and per repelled projection, `Some(value)` to reuse or `None` to compute. The default
+/// holds nothing.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Held {
+    terms: Vec<Option<f64>>,
+    repulsion: Vec<Option<f64>>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::targets::Target;
+    use rand::Rng as _;
+
+    /// With `x` and `y` held, as `--latin` holds them in 4D, the `xy` term and the `xy` repulsion are
+    /// taken once from [`Objective::held_parts`], and the evaluation keeps the same loss bits and the
+    /// same gradient at every coordinate the solver moves (`u`, `v`).
+    #[test]
+    fn held_parts_keep_the_loss_bits_and_the_free_gradient() {
+        let n = 64;
+        let grid = Target::parse("kind = \"blue-noise\"\nradius = 0.5\n")
+            .unwrap()
+            .grid(n)
+            .unwrap();
+        let term = |proj, weight| Term {
+            proj,
+            grid: grid.clone(),
+            weight,
+        };
+        let objective = Objective {
+            n,
+            dims: 4,
+            terms: vec![
+                term(Projection::XU, 1.0),
+                term(Projection::YV, 1.0),
+                term(Projection::XY, 0.3),
+                term(Projection::UV, 0.3),
+            ],
+            repulsion: Repulsion {
+                radius: 1.0,
+                weight: 1.0,
+            },
+            annular_weight: 100.0,
+            method: crate::spectrum::Method::Exact,
+        };
+        let mut rng = crate::rng::stream(3, 0);
+        let start: Vec<f64> = (0..4 * n).map(|_| rng.random::<f64>()).collect();
+        let held = crate::optimize::latin::frozen(n, 4, &[0, 1]);
+        let parts = objective.held_parts(&start, &held);
+        let is_some = |v: &[Option<f64>]| v.iter().map(Option::is_some).collect::<Vec<_>>();
+        assert_eq!(is_some(&parts.terms), [false, false, true, false]);
+        assert_eq!(is_some(&parts.repulsion), [false, false, true, false]);
+        assert!(parts.repulsion[2].unwrap() > 0.0, "the xy repulsion acts");
+        // The solver moves u and v only; x and y keep their values.
+        let mut moved = start.clone();
+        for (c, h) in moved.iter_mut().zip(&held) {
+            if !h {
+                *c = crate::points::wrap(*c + 0.01 * (rng.random::<f64>() - 0.5));
+            }
+        }
+        for set in [&start, &moved] {
+            let full = objective.evaluate(set);
+            let reused = objective.evaluate_with(set, &parts);
+            assert_eq!(full.loss.to_bits(), reused.loss.to_bits());
+            assert_eq!(full.spectral.to_bits(), reused.spectral.to_bits());
+            assert_eq!(full.repulsion.to_bits(), reused.repulsion.to_bits());
+            for (i, h) in held.iter().enumerate() {
+                if !h {
+                    assert_eq!(
+                        full.gradient[i].to_bits(),
+                        reused.gradient[i].to_bits(),
+                        "{i}"
+                    );
+                }
+            }
         }
     }
 }

@@ -2,7 +2,7 @@
 //! restarted from the best point until a limit is met, with steepest descent and a backtracking
 //! (Armijo) line search as the fallback when L-BFGS fails.
 
-use super::loss::{Evaluation, Objective};
+use super::loss::{Evaluation, Held, Objective};
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{
     CostFunction, Error as ArgminError, Executor, Gradient, State, TerminationReason, KV,
@@ -83,15 +83,17 @@ pub struct Outcome {
     pub log: Vec<LogRow>,
 }
 
-/// The objective with some coordinates held fixed: their gradient is zero, so no solver moves them.
+/// The objective with some coordinates held fixed: their gradient is zero, so no solver moves them,
+/// and the loss parts that depend on them alone are computed once, at the start.
 struct Variables<'a> {
     objective: &'a Objective,
     frozen: Option<&'a [bool]>,
+    held: Held,
 }
 
 impl Variables<'_> {
     fn evaluate(&self, set: &[f64]) -> Evaluation {
-        let mut e = self.objective.evaluate(set);
+        let mut e = self.objective.evaluate_with(set, &self.held);
         if let Some(mask) = self.frozen {
             for (g, &f) in e.gradient.iter_mut().zip(mask) {
                 if f {
@@ -289,7 +291,12 @@ pub fn minimize(
 ) -> Outcome {
     let t0 = Instant::now();
     let rows = Arc::new(Mutex::new(Vec::new()));
-    let objective = &Variables { objective, frozen };
+    let held = frozen.map_or_else(Held::default, |mask| objective.held_parts(start, mask));
+    let objective = &Variables {
+        objective,
+        frozen,
+        held,
+    };
     let initial = objective.evaluate(start);
     rows.lock().expect("log lock").push(LogRow {
         iter: 0,

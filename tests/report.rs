@@ -98,7 +98,8 @@ fn compare(dir: &Path, name: &str, config: &str, cache: &Path) -> PathBuf {
 /// errors: at least 0 (0 when every estimate errs alike, as a table's centred strata do on the edge
 /// with the exact oracle), and at most `mse · sqrt(R / (R − 1))`, the bound for non-negative samples
 /// (Σ(x − m)² ≤ Σx² ≤ (Σx)² = R²m², so s² ≤ R²m²/(R − 1) and s/sqrt(R) ≤ that). Only a necessary
-/// condition, which any non-negative pair meets: the rows [`recomputed`] covers are checked exactly.
+/// condition, which the moments of any non-negative sample meet: the rows [`recomputed`] covers are
+/// checked exactly.
 fn stderr_fits(mse: f64, stderr: f64) -> bool {
     let r = REALIZATIONS as f64;
     (0.0..=mse * (r / (r - 1.0)).sqrt()).contains(&stderr)

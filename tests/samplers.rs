@@ -591,11 +591,6 @@ fn every_sampler_handles_its_smallest_sets() {
     }
 }
 
-/// The rank-1 lattice is an N-rooks set, and a shifted lattice's power spectrum is exactly `N` on its
-/// dual lattice `k1 + g k2 ≡ 0 (mod N)` and 0 elsewhere (exact DFT, within the rounding bound of
-/// [`lattice_power_error`]), for a power of two
-/// and for an N with odd factors; `xuyv-lattice` carries the lattice into `xu`; in 4D every 2D
-/// projection `(i, j)` has the spectrum of the 2D lattice `(z_i, z_j)`.
 /// How far the exact DFT's `P` of a shifted rank-1 lattice of `n` points may be from the ideal
 /// spectrum on a `res × res` grid (`u = 2^−53`): `(on_dual, off_dual)`, the absolute error where
 /// `P = N` and the largest `P` elsewhere. The crate bounds the computation of `F` by
@@ -617,6 +612,11 @@ fn lattice_power_error(n: usize, res: usize) -> (f64, f64) {
     )
 }
 
+/// The rank-1 lattice is an N-rooks set, and a shifted lattice's power spectrum is exactly `N` on its
+/// dual lattice `k1 + g k2 ≡ 0 (mod N)` and 0 elsewhere (exact DFT, within the rounding bound of
+/// [`lattice_power_error`]), for a power of two and
+/// for an N with odd factors; `xuyv-lattice` carries the lattice into `xu`; in 4D every 2D
+/// projection `(i, j)` has the spectrum of the 2D lattice `(z_i, z_j)`.
 #[test]
 fn lattice_is_nrooks_with_its_spectrum_on_the_dual_lattice() {
     use anisospec::samplers::lattice::generating_vector;

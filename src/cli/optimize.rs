@@ -54,8 +54,9 @@ pub struct OptimizeArgs {
     /// Hold the first coordinate (2D) or x and y (4D) where --init put them, one point per interval
     /// [s/N, (s+1)/N) at its centre (by rank if the start is not stratified), and move only the
     /// others. The k1 axis then stays dark up to N, beyond the loss's frequency grid, and in 4D xy
-    /// keeps the start's structure (its strata term is then a constant of the loss, computed once,
-    /// so --strat-radius and --strat-weight act on uv alone). Use it, with --init padded-pmj02 in 4D,
+    /// keeps the start's structure (its strata term and its repulsion are then constants of the
+    /// loss, computed once, so --strat-radius and --strat-weight act on uv alone and the repulsion
+    /// flags on xu, yv and uv). Use it, with --init padded-pmj02 in 4D,
     /// for tables applied through the transported shear (widened hairline, double wedge).
     #[arg(long)]
     pub latin: bool,
@@ -97,8 +98,10 @@ pub struct OptimizeArgs {
     /// Stop when a solver round lowers the loss by less than this fraction of the loss it started
     /// from (a finite number >= 0; with 0 a run stops only at a round that gains nothing, or at the
     /// iteration or time limit). A round is one L-BFGS run restarted from the best set so far, which
-    /// ends when an iteration changes the loss by less than tol × 1e-3 × min(|loss|, 1); after a
-    /// failed L-BFGS step, a round is 50 iterations of steepest descent instead.
+    /// ends when an iteration changes the loss by less than tol × 1e-3 × min(|loss|, 1), or when its
+    /// line search gives up (the run then stops if that round gained nothing); after an L-BFGS
+    /// round that fails on a non-finite loss or gradient, a round is 50 iterations of steepest
+    /// descent instead.
     #[arg(long, default_value_t = DEFAULT_LIMITS.tol, allow_negative_numbers = true)]
     pub tol: f64,
 }

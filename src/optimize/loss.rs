@@ -220,8 +220,8 @@ impl Objective {
         )
     }
 
-    /// The projections repulsion acts in: each constrained projection once, in the terms' order.
-    fn repelled(&self) -> Vec<Projection> {
+    /// The constrained projections, each once, in the terms' order: those repulsion acts in.
+    pub(super) fn constrained_projections(&self) -> Vec<Projection> {
         let mut seen: Vec<Projection> = Vec::new();
         for term in &self.terms {
             if !seen.contains(&term.proj) {
@@ -251,7 +251,7 @@ impl Objective {
                 .map(|t| is_held(t.proj).then(|| self.term_loss(t, set).0))
                 .collect(),
             repulsion: self
-                .repelled()
+                .constrained_projections()
                 .into_iter()
                 .map(|proj| is_held(proj).then(|| self.repulsion_loss(proj, set).0))
                 .collect(),
@@ -264,6 +264,7 @@ impl Objective {
     /// so the `xy` strata term and its repulsion (about a quarter of the spectral work) are constants.
     pub(super) fn evaluate_with(&self, set: &[f64], held: &Held) -> Evaluation {
         debug_assert_eq!(set.len(), self.n * self.dims);
+        debug_assert!(held.terms.is_empty() || held.terms.len() == self.terms.len());
         let mut gradient = vec![0.0; set.len()];
         let (mut spectral, mut repulsion) = (0.0, 0.0);
         let mut add = |proj: Projection, ga: &[f64], gb: &[f64]| {
@@ -281,7 +282,7 @@ impl Objective {
             spectral += l;
             add(term.proj, &ga, &gb);
         }
-        for (i, proj) in self.repelled().into_iter().enumerate() {
+        for (i, proj) in self.constrained_projections().into_iter().enumerate() {
             if let Some(e) = held.repulsion.get(i).copied().flatten() {
                 repulsion += e;
                 continue;

@@ -277,9 +277,7 @@ fn separate_duplicates(objective: &Objective, set: &mut [f64], rng: &mut Rng) ->
     let close = 1e-9 / (n as f64).sqrt();
     let step = 1e-3 / (n as f64).sqrt();
     let mut moved = vec![false; n];
-    let mut projs: Vec<Projection> = objective.terms.iter().map(|t| t.proj).collect();
-    projs.dedup();
-    for proj in projs {
+    for proj in objective.constrained_projections() {
         let pts = loss::projected(set, dims, proj);
         let tree: ImmutableKdTree<f64, 2> =
             ImmutableKdTree::new_from_slice(&pts).expect("finite points build a tree");

@@ -84,16 +84,29 @@ pub struct Outcome {
 }
 
 /// The objective with some coordinates held fixed: their gradient is zero, so no solver moves them,
-/// and the loss parts that depend on them alone are computed once, at the start.
+/// and the loss parts that depend on them alone are computed once, at `start`.
 struct Variables<'a> {
     objective: &'a Objective,
     frozen: Option<&'a [bool]>,
     held: Held,
+    start: &'a [f64],
 }
 
 impl Variables<'_> {
     fn evaluate(&self, set: &[f64]) -> Evaluation {
-        let mut e = self.objective.evaluate_with(set, &self.held);
+        // The held parts stand while every held coordinate keeps its start bits, as the solvers
+        // keep them (a zero gradient gives a zero step); should one ever move, the loss is computed
+        // in full rather than from stale parts.
+        let unmoved = self.frozen.is_none_or(|mask| {
+            mask.iter()
+                .zip(set.iter().zip(self.start))
+                .all(|(&held, (a, b))| !held || a.to_bits() == b.to_bits())
+        });
+        let mut e = if unmoved {
+            self.objective.evaluate_with(set, &self.held)
+        } else {
+            self.objective.evaluate(set)
+        };
         if let Some(mask) = self.frozen {
             for (g, &f) in e.gradient.iter_mut().zip(mask) {
                 if f {
@@ -278,9 +291,11 @@ fn run_round(
 /// Minimizes `objective` from `start` (`[n, dims]`) within `limits`.
 ///
 /// L-BFGS runs in rounds; each round restarts from the best set so far, and the run stops when a round
-/// gains less than `limits.tol` (relative), or at the iteration or time limit. A round in which
-/// L-BFGS fails (a non-finite value, a failed line search) is redone with steepest descent. The
-/// returned loss is always finite: a start whose loss is not finite is an error for the caller.
+/// gains less than `limits.tol` (relative), when a round whose line search gave up (argmin ends such
+/// a round as a solver exit, not an error) gained nothing, or at the iteration or time limit. A
+/// round in which L-BFGS fails (a non-finite loss or gradient outside its line search) is redone
+/// with steepest descent. The returned loss is always finite: a start whose loss is not finite is
+/// an error for the caller.
 ///
 /// Coordinates where `frozen` (`[n, dims]`) is `true` keep their start values.
 pub fn minimize(
@@ -296,6 +311,7 @@ pub fn minimize(
         objective,
         frozen,
         held,
+        start,
     };
     let initial = objective.evaluate(start);
     rows.lock().expect("log lock").push(LogRow {
@@ -380,7 +396,8 @@ pub fn minimize(
         match (round.failed, use_fallback) {
             (Some(why), true) => break format!("both solvers failed; last: {why}"),
             (Some(_), false) => {
-                // L-BFGS failed (non-finite value, failed line search): a round of steepest descent.
+                // L-BFGS failed (a non-finite value outside its line search): a round of steepest
+                // descent.
                 use_fallback = true;
                 fallback_used = true;
             }

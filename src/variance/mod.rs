@@ -314,8 +314,8 @@ fn full_grid(active: usize, res: usize) -> bool {
     active * 4 > res * res
 }
 
-/// `|F(k)|² / N` at the active frequencies of one plane: the full-grid sums when most of the grid is
-/// active ([`full_grid`]), else exact sums at the active frequencies only.
+/// `|F(k)|² / N` at the active frequencies of one plane: the full-grid sums when more than a quarter
+/// of the grid is active ([`full_grid`]), else exact sums at the active frequencies only.
 fn power_at(
     points: &[[f64; 2]],
     res: usize,

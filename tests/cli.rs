@@ -4219,15 +4219,16 @@ fn a_full_standard_error_keeps_the_work_and_the_exit_status() {
 }
 
 /// `converge --cache DIR` keeps a pixel's reference in DIR, ahead of `$ANISOSPEC_CACHE` (which then
-/// stays empty), as compare's and render's --cache do; a --cache with an analytic integrand, which
-/// has no reference to cache, is refused.
+/// stays empty), as compare's and render's --cache do; without the flag the variable chooses, and an
+/// empty variable counts as unset (out/cache under the working folder); a --cache with an analytic
+/// integrand, which has no reference to cache, is refused.
 #[test]
 fn converge_caches_a_pixel_reference_in_its_cache_flag() {
     let dir = tempfile::tempdir().unwrap();
     let (given, variable) = (dir.path().join("given"), dir.path().join("variable"));
     std::fs::create_dir(&variable).unwrap();
     let csv = dir.path().join("c.csv");
-    let converge = |cache: Option<&Path>| {
+    let converge = |cache: Option<&Path>, variable: &Path| {
         let mut args = vec![
             "converge",
             "--sampler",
@@ -4246,23 +4247,29 @@ fn converge_caches_a_pixel_reference_in_its_cache_flag() {
         }
         let o = Command::new(env!("CARGO_BIN_EXE_anisospec"))
             .args(&args)
-            .env("ANISOSPEC_CACHE", &variable)
+            .env("ANISOSPEC_CACHE", variable)
             .current_dir(dir.path())
             .output()
             .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     };
     let entries = |d: &Path| std::fs::read_dir(d).map_or(0, |e| e.count());
-    converge(Some(&given));
+    converge(Some(&given), &variable);
     assert_eq!(entries(&given), 1, "the reference is cached in --cache");
     assert_eq!(
         entries(&variable),
         0,
         "--cache takes precedence over $ANISOSPEC_CACHE"
     );
-    // Without the flag the variable chooses, as before.
-    converge(None);
+    // Without the flag the variable chooses, as before; an empty one is unset.
+    converge(None, &variable);
     assert_eq!(entries(&variable), 1);
+    converge(None, Path::new(""));
+    assert_eq!(
+        entries(&dir.path().join("out/cache")),
+        1,
+        "an empty variable"
+    );
     let args = [
         "converge",
         "--sampler",

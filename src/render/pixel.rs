@@ -286,12 +286,13 @@ pub fn parse_pixel_spec(
     };
     let scene = Arc::new(Scene::load(scene.as_deref())?);
     let label = format!("pixel:{}", body.trim());
-    Ok(Box::new(
-        PixelIntegrand::new(scene, px, py)?
-            .with_ref_count(count)?
-            .with_cache_dir(Some(cache_dir_and_source(cache).0))
-            .with_label(label),
-    ))
+    let pixel = PixelIntegrand::new(scene, px, py)?
+        .with_ref_count(count)?
+        .with_label(label);
+    Ok(Box::new(match cache {
+        Some(dir) => pixel.with_cache_dir(Some(dir.to_path_buf())),
+        None => pixel,
+    }))
 }
 
 #[cfg(test)]

@@ -3963,6 +3963,19 @@ fn an_interrupted_gallery_leaves_no_temporary() {
     }
 }
 
+/// A converge run on a pixel whose reference takes a moment (1024 rays), short of its output flag.
+const TINY_PIXEL_CONVERGE: &[&str] = &[
+    "converge",
+    "--sampler",
+    "random",
+    "--integrand",
+    "pixel:px=1,py=1,refcount=1024",
+    "-n",
+    "16",
+    "--realizations",
+    "4",
+];
+
 /// A cache folder chosen by `$ANISOSPEC_CACHE` that is a file is refused before any work, naming the
 /// variable (not a `--cache` flag the user never gave), by every command that caches a reference:
 /// render, compare, and converge on a pixel (which only warned after the work before).
@@ -3974,18 +3987,7 @@ fn a_cache_variable_that_names_a_file_is_refused_by_name() {
     let csv = dir.path().join("out.csv");
     let report = dir.path().join("report");
     let render = ["render", "--sampler", "sobol", "--ref-count", "1024", "-o"];
-    let converge = [
-        "converge",
-        "--sampler",
-        "random",
-        "--integrand",
-        "pixel:px=1,py=1,refcount=1024",
-        "-n",
-        "16",
-        "--realizations",
-        "4",
-        "--output",
-    ];
+    let converge = [TINY_PIXEL_CONVERGE, &["--output"]].concat();
     for (args, out) in [
         (&render[..], &exr),
         (&converge[..], &csv),
@@ -4229,19 +4231,7 @@ fn converge_caches_a_pixel_reference_in_its_cache_flag() {
     std::fs::create_dir(&variable).unwrap();
     let csv = dir.path().join("c.csv");
     let converge = |cache: Option<&Path>, variable: &Path| {
-        let mut args = vec![
-            "converge",
-            "--sampler",
-            "random",
-            "--integrand",
-            "pixel:px=1,py=1,refcount=1024",
-            "-n",
-            "16",
-            "--realizations",
-            "4",
-            "-o",
-            csv.to_str().unwrap(),
-        ];
+        let mut args = [TINY_PIXEL_CONVERGE, &["-o", csv.to_str().unwrap()]].concat();
         if let Some(c) = cache {
             args.extend(["--cache", c.to_str().unwrap()]);
         }
